@@ -1,0 +1,12 @@
+#pragma once
+// Each area of glasspiv registers its subcommands on the one `glasspiv` app.
+// Commands are thin: parse, call the library, report. Errors travel as
+// InputError and become one line and exit status 2 in main().
+#include <CLI/CLI.hpp>
+
+namespace glasspiv {
+
+void register_camera_commands(CLI::App& app);
+void register_demo_command(CLI::App& app);
+
+}  // namespace glasspiv

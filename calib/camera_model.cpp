@@ -1,0 +1,232 @@
+#include "calib/camera_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/LU>
+
+#include "util/input_error.h"
+
+namespace glasspiv {
+
+std::string lens_model_name(LensModel model) {
+  switch (model) {
+    case LensModel::Pinhole: return "pinhole";
+    case LensModel::OpenCV4: return "opencv4";
+    case LensModel::OpenCV5: return "opencv5";
+    case LensModel::OpenCV8: return "opencv8";
+    case LensModel::OpenCV12: return "opencv12";
+    case LensModel::OpenCV14: return "opencv14";
+  }
+  return "unknown";
+}
+
+LensModel lens_model_from_name(const std::string& name) {
+  for (LensModel m : {LensModel::Pinhole, LensModel::OpenCV4, LensModel::OpenCV5, LensModel::OpenCV8,
+                      LensModel::OpenCV12, LensModel::OpenCV14})
+    if (lens_model_name(m) == name) return m;
+  throw InputError("", "lens_model",
+                   "unknown lens model '" + name + "' (expected pinhole, opencv4, opencv5, opencv8, opencv12 or opencv14)");
+}
+
+LensModel lens_model_for_count(std::size_t count, const std::string& field) {
+  switch (count) {
+    case 0: return LensModel::Pinhole;
+    case 4: return LensModel::OpenCV4;
+    case 5: return LensModel::OpenCV5;
+    case 8: return LensModel::OpenCV8;
+    case 12: return LensModel::OpenCV12;
+    case 14: return LensModel::OpenCV14;
+    default:
+      throw InputError("", field,
+                       "has " + std::to_string(count) + " coefficients; OpenCV's model takes 0, 4, 5, 8, 12 or 14");
+  }
+}
+
+const char* to_string(UnprojectStatus status) {
+  switch (status) {
+    case UnprojectStatus::Ok: return "ok";
+    case UnprojectStatus::NonFinite: return "pixel is not finite";
+    case UnprojectStatus::NotConverged: return "no ray maps to this pixel (outside the lens model's image)";
+    case UnprojectStatus::BeyondFold: return "the pixel lies beyond the radius where the distortion folds back";
+  }
+  return "unknown";
+}
+
+CameraModel::CameraModel(int width_px, int height_px, double fx_px, double fy_px, double cx_px, double cy_px,
+                         std::vector<double> distortion)
+    : width_px_(width_px), height_px_(height_px), lens_model_(lens_model_for_count(distortion.size())) {
+  if (width_px <= 0) throw InputError("", "image width", "must be a positive number of pixels");
+  if (height_px <= 0) throw InputError("", "image height", "must be a positive number of pixels");
+  if (!(std::isfinite(fx_px) && fx_px > 0)) throw InputError("", "fx", "must be positive and finite");
+  if (!(std::isfinite(fy_px) && fy_px > 0)) throw InputError("", "fy", "must be positive and finite");
+  if (!std::isfinite(cx_px)) throw InputError("", "cx", "must be finite");
+  if (!std::isfinite(cy_px)) throw InputError("", "cy", "must be finite");
+  static const char* names[] = {"k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6",
+                                "s1", "s2", "s3", "s4", "tau_x", "tau_y"};
+  for (std::size_t i = 0; i < distortion.size(); ++i)
+    if (!std::isfinite(distortion[i])) throw InputError("", names[i], "must be finite");
+  intrinsics_ = {fx_px, fy_px, cx_px, cy_px};
+  std::copy(distortion.begin(), distortion.end(), intrinsics_.begin() + 4);
+  tilted_ = lens_model_ == LensModel::OpenCV14;
+  if (tilted_) tilt_projection_matrix(intrinsics_[4 + 12], intrinsics_[4 + 13], tilt_.data());
+  find_fold_radii();
+}
+
+std::vector<double> CameraModel::distortion() const {
+  return {intrinsics_.begin() + 4, intrinsics_.begin() + 4 + distortion_count()};
+}
+
+Eigen::Matrix3d CameraModel::camera_matrix() const {
+  Eigen::Matrix3d k;
+  k << fx_px(), 0, cx_px(), 0, fy_px(), cy_px(), 0, 0, 1;
+  return k;
+}
+
+Eigen::Vector2d CameraModel::project_normalized(const Eigen::Vector2d& normalized,
+                                                Eigen::Matrix2d* d_pixel_d_normalized) const {
+  double xd, yd, j[4];
+  distort(intrinsics_.data() + 4, tilted_ ? tilt_.data() : nullptr, normalized.x(), normalized.y(), &xd, &yd,
+          d_pixel_d_normalized ? j : nullptr);
+  if (d_pixel_d_normalized) *d_pixel_d_normalized << fx_px() * j[0], fx_px() * j[1], fy_px() * j[2], fy_px() * j[3];
+  return {fx_px() * xd + cx_px(), fy_px() * yd + cy_px()};
+}
+
+std::optional<Eigen::Vector2d> CameraModel::project(const Eigen::Vector3d& p,
+                                                    Eigen::Matrix<double, 2, 3>* d_pixel_d_point) const {
+  if (!p.allFinite() || !(p.z() > 0)) return std::nullopt;
+  const double inv_z = 1.0 / p.z();
+  const Eigen::Vector2d n(p.x() * inv_z, p.y() * inv_z);
+  Eigen::Matrix2d d_pixel_d_n;
+  const Eigen::Vector2d pixel = project_normalized(n, d_pixel_d_point ? &d_pixel_d_n : nullptr);
+  if (d_pixel_d_point) {
+    Eigen::Matrix<double, 2, 3> d_n_d_p;
+    d_n_d_p << inv_z, 0, -n.x() * inv_z, 0, inv_z, -n.y() * inv_z;
+    *d_pixel_d_point = d_pixel_d_n * d_n_d_p;
+  }
+  return pixel;
+}
+
+void CameraModel::find_fold_radii() {
+  // March outwards along each direction until the Jacobian determinant of the
+  // distortion stops being positive: that is where the image folds back.
+  constexpr double kStep = 1e-2;  // relative radius step of the march, refined by bisection
+  const auto folded = [&](const Eigen::Vector2d& n) {
+    Eigen::Matrix2d j;
+    project_normalized(n, &j);
+    return !(j.determinant() > 0);
+  };
+  for (int d = 0; d < kFoldDirections; ++d) {
+    double& fold = fold_radius_by_direction_[d];
+    fold = kFoldSearchRadius;
+    if (lens_model_ == LensModel::Pinhole) continue;
+    const double angle = 2.0 * M_PI * d / kFoldDirections;
+    const Eigen::Vector2d direction(std::cos(angle), std::sin(angle));
+    double inside = 0;
+    for (double r = 1e-3; r < kFoldSearchRadius; inside = r, r *= 1.0 + kStep) {
+      if (!folded(direction * r)) continue;
+      double outside = r;
+      for (int i = 0; i < 30; ++i) {
+        const double mid = 0.5 * (inside + outside);
+        (folded(direction * mid) ? outside : inside) = mid;
+      }
+      fold = inside;
+      break;
+    }
+  }
+}
+
+double CameraModel::fold_radius() const {
+  const double fold = *std::min_element(fold_radius_by_direction_.begin(), fold_radius_by_direction_.end());
+  // Directions between the samples may fold slightly earlier: keep a margin.
+  return fold < kFoldSearchRadius ? 0.98 * fold : fold;
+}
+
+bool CameraModel::inside_invertible_region(const Eigen::Vector2d& n) const {
+  if (lens_model_ == LensModel::Pinhole) return true;
+  const double r = n.norm();
+  if (r >= kFoldSearchRadius) return false;
+  double sector = std::atan2(n.y(), n.x()) / (2.0 * M_PI) * kFoldDirections;
+  if (sector < 0) sector += kFoldDirections;
+  const int i = static_cast<int>(sector) % kFoldDirections;
+  const double bound = std::min(fold_radius_by_direction_[i], fold_radius_by_direction_[(i + 1) % kFoldDirections]);
+  return bound >= kFoldSearchRadius ? true : r < 0.98 * bound;
+}
+
+UnprojectResult CameraModel::unproject(const Eigen::Vector2d& pixel, double tolerance_px) const {
+  UnprojectResult result;
+  if (!pixel.allFinite()) {
+    result.status = UnprojectStatus::NonFinite;
+    return result;
+  }
+  const Eigen::Vector2d target((pixel.x() - cx_px()) / fx_px(), (pixel.y() - cy_px()) / fy_px());
+  Eigen::Vector2d n = target;  // the undistorted guess is close for realistic lenses
+  if (lens_model_ != LensModel::Pinhole) {
+    constexpr int kMaxIterations = 100;
+    Eigen::Matrix2d j;
+    Eigen::Vector2d error = project_normalized(n, &j) - pixel;
+    bool converged = error.norm() <= tolerance_px;
+    int it = 0;
+    for (; it < kMaxIterations && !converged; ++it) {
+      const double det = j.determinant();
+      if (!(std::abs(det) > 0) || !std::isfinite(det)) break;
+      const Eigen::Vector2d step = j.inverse() * error;
+      // Backtracking: halve the Newton step until the residual decreases, so
+      // strong distortion far from the guess cannot throw the iterate away.
+      double scale = 1.0;
+      Eigen::Vector2d trial_n, trial_error;
+      Eigen::Matrix2d trial_j;
+      bool improved = false;
+      for (int halving = 0; halving < 30; ++halving, scale *= 0.5) {
+        trial_n = n - scale * step;
+        trial_error = project_normalized(trial_n, &trial_j) - pixel;
+        if (trial_error.allFinite() && trial_error.norm() < error.norm()) {
+          improved = true;
+          break;
+        }
+      }
+      if (!improved) break;
+      n = trial_n;
+      error = trial_error;
+      j = trial_j;
+      converged = error.norm() <= tolerance_px;
+    }
+    result.iterations = it;
+    if (!converged) {
+      result.status = UnprojectStatus::NotConverged;
+      return result;
+    }
+    if (!inside_invertible_region(n)) {
+      result.status = UnprojectStatus::BeyondFold;
+      return result;
+    }
+  }
+  result.status = UnprojectStatus::Ok;
+  result.normalized = n;
+  result.ray_camera = Eigen::Vector3d(n.x(), n.y(), 1.0).normalized();
+  return result;
+}
+
+std::optional<CameraModel::FieldOfView> CameraModel::field_of_view() const {
+  // Angles between the rays through opposite edge points (pixel centres of the
+  // outermost pixels extended by half a pixel to the sensor edge).
+  const double left = -0.5, right = width_px_ - 0.5, top = -0.5, bottom = height_px_ - 0.5;
+  const auto angle_deg = [&](Eigen::Vector2d a, Eigen::Vector2d b) -> std::optional<double> {
+    const UnprojectResult ra = unproject(a, 1e-9), rb = unproject(b, 1e-9);
+    if (!ra.ok() || !rb.ok()) return std::nullopt;
+    return std::acos(std::clamp(ra.ray_camera.dot(rb.ray_camera), -1.0, 1.0)) * 180.0 / M_PI;
+  };
+  const auto h = angle_deg({left, cy_px()}, {right, cy_px()});
+  const auto v = angle_deg({cx_px(), top}, {cx_px(), bottom});
+  const auto d = angle_deg({left, top}, {right, bottom});
+  if (!h || !v || !d) return std::nullopt;
+  return FieldOfView{*h, *v, *d};
+}
+
+bool CameraModel::operator==(const CameraModel& other) const {
+  return width_px_ == other.width_px_ && height_px_ == other.height_px_ && lens_model_ == other.lens_model_ &&
+         intrinsics_ == other.intrinsics_;
+}
+
+}  // namespace glasspiv

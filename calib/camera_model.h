@@ -1,0 +1,107 @@
+#pragma once
+// The camera model of glasspiv: a pinhole with OpenCV's distortion (0, 4, 5, 8,
+// 12 or 14 coefficients). Conventions (docs/conventions.md): camera frame x right,
+// y down, z forward; pixel (0, 0) is the centre of the top-left pixel, as in
+// OpenCV and mrcal.
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "calib/distortion.h"
+
+namespace glasspiv {
+
+// The OpenCV distortion lengths we support, named as mrcal names them.
+enum class LensModel { Pinhole = 0, OpenCV4 = 4, OpenCV5 = 5, OpenCV8 = 8, OpenCV12 = 12, OpenCV14 = 14 };
+
+// "opencv8" etc.; parse throws InputError on an unknown name.
+std::string lens_model_name(LensModel model);
+LensModel lens_model_from_name(const std::string& name);
+// The model for a coefficient count; throws InputError naming `field` otherwise.
+LensModel lens_model_for_count(std::size_t count, const std::string& field = "distortion_coefficients");
+
+enum class UnprojectStatus {
+  Ok,
+  NonFinite,      // the pixel was NaN or infinite
+  NotConverged,   // the iteration did not reach the tolerance (no preimage)
+  BeyondFold,     // the only preimage lies past the fold (or past kFoldSearchRadius)
+};
+const char* to_string(UnprojectStatus status);
+
+struct UnprojectResult {
+  UnprojectStatus status = UnprojectStatus::NotConverged;
+  Eigen::Vector3d ray_camera = Eigen::Vector3d::Zero();  // unit vector, z > 0, when Ok
+  Eigen::Vector2d normalized = Eigen::Vector2d::Zero();  // (X/Z, Y/Z) when Ok
+  int iterations = 0;
+  bool ok() const { return status == UnprojectStatus::Ok; }
+};
+
+class CameraModel {
+ public:
+  // Throws InputError (field named, no file) if a value is unusable: sizes not
+  // positive, focal lengths not positive, anything non-finite, or a distortion
+  // vector whose length is not 0, 4, 5, 8, 12 or 14.
+  CameraModel(int width_px, int height_px, double fx_px, double fy_px, double cx_px, double cy_px,
+              std::vector<double> distortion = {});
+
+  int width_px() const { return width_px_; }
+  int height_px() const { return height_px_; }
+  double fx_px() const { return intrinsics_[0]; }
+  double fy_px() const { return intrinsics_[1]; }
+  double cx_px() const { return intrinsics_[2]; }
+  double cy_px() const { return intrinsics_[3]; }
+  LensModel lens_model() const { return lens_model_; }
+  int distortion_count() const { return static_cast<int>(lens_model_); }
+  // The distortion vector in OpenCV order with the model's length.
+  std::vector<double> distortion() const;
+  // fx, fy, cx, cy then 14 distortion coefficients (zero beyond the model's length):
+  // the parameter block project_point<T> takes.
+  const std::array<double, 4 + kMaxDistortionCoefficients>& intrinsics() const { return intrinsics_; }
+  Eigen::Matrix3d camera_matrix() const;
+
+  // Pixel of a point in the camera frame (mm or any unit). Returns nullopt if the
+  // point is not in front of the camera (z <= 0) or not finite.
+  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& point_camera,
+                                         Eigen::Matrix<double, 2, 3>* d_pixel_d_point = nullptr) const;
+  // Pixel of normalised coordinates (X/Z, Y/Z), with d(pixel)/d(normalised) if asked.
+  Eigen::Vector2d project_normalized(const Eigen::Vector2d& normalized,
+                                     Eigen::Matrix2d* d_pixel_d_normalized = nullptr) const;
+
+  // The ray through a pixel: damped Newton on the distortion, iterated until the
+  // reprojection agrees to `tolerance_px` (far below 1e-6 px by default).
+  UnprojectResult unproject(const Eigen::Vector2d& pixel, double tolerance_px = 1e-10) const;
+
+  // Normalised radius below which the distortion is invertible in every
+  // direction (the Jacobian stays positive); kFoldSearchRadius when no fold was
+  // found within that radius (84 deg off axis, far past any pinhole lens).
+  double fold_radius() const;
+  static constexpr double kFoldSearchRadius = 10.0;
+
+  // Horizontal, vertical and diagonal field of view in degrees, measured through
+  // the real (distorted) model from the image edges.
+  struct FieldOfView {
+    double horizontal_deg, vertical_deg, diagonal_deg;
+  };
+  std::optional<FieldOfView> field_of_view() const;
+
+  bool operator==(const CameraModel& other) const;
+
+ private:
+  // The first fold along each of kFoldDirections directions from the axis; the
+  // invertible region is star-shaped around the axis and bounded by them.
+  static constexpr int kFoldDirections = 72;
+  void find_fold_radii();
+  bool inside_invertible_region(const Eigen::Vector2d& normalized) const;
+
+  int width_px_, height_px_;
+  LensModel lens_model_;
+  std::array<double, 4 + kMaxDistortionCoefficients> intrinsics_{};
+  std::array<double, 9> tilt_{};
+  bool tilted_ = false;
+  std::array<double, kFoldDirections> fold_radius_by_direction_{};
+};
+
+}  // namespace glasspiv

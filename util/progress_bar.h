@@ -1,0 +1,25 @@
+#pragma once
+// A terminal progress bar for anything that can take over a second. It draws on
+// stderr only when stderr is a terminal, so logs and pipes stay clean.
+#include <chrono>
+#include <cstddef>
+#include <string>
+
+namespace glasspiv {
+
+class ProgressBar {
+ public:
+  ProgressBar(std::string label, std::size_t total);
+  ~ProgressBar();
+  void advance(std::size_t steps = 1);
+  void finish();
+
+ private:
+  void draw(bool force);
+  std::string label_;
+  std::size_t total_, done_ = 0;
+  bool enabled_, finished_ = false;
+  std::chrono::steady_clock::time_point start_, last_draw_;
+};
+
+}  // namespace glasspiv
