@@ -188,9 +188,15 @@ std::vector<Camera> read_cameras(const std::string& path) {
 }
 
 Camera read_camera(const std::string& path, const std::string& name) {
-  std::vector<Camera> cameras = read_cameras(path);
+  const std::string contents = read_file(path);
+  const CameraFileFormat format = detect_format(contents, path);
+  std::vector<Camera> cameras = parse_cameras(contents, format, path);
+  std::vector<std::string> ids;
+  if (format == CameraFileFormat::Davis) ids = davis_camera_identifiers(contents, path);
   std::string names;
-  for (const Camera& c : cameras) names += (names.empty() ? "'" : ", '") + c.name + "'";
+  for (std::size_t i = 0; i < cameras.size(); ++i)
+    names += fmt::format("{}'{}'{}", names.empty() ? "" : ", ", cameras[i].name,
+                         i < ids.size() ? " (CameraIdentifier " + ids[i] + ")" : "");
   if (name.empty()) {
     if (cameras.size() == 1) return std::move(cameras.front());
     throw InputError(path, "",
@@ -198,6 +204,8 @@ Camera read_camera(const std::string& path, const std::string& name) {
   }
   for (Camera& c : cameras)
     if (c.name == name) return std::move(c);
+  for (std::size_t i = 0; i < ids.size() && i < cameras.size(); ++i)
+    if (ids[i] == name) return std::move(cameras[i]);
   throw InputError(path, "name", fmt::format("no camera named '{}' (the file holds {})", name, names));
 }
 

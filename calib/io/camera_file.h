@@ -36,7 +36,8 @@ std::string format_cameras(const std::vector<Camera>& cameras, CameraFileFormat 
 
 // File helpers on top of the two above.
 std::vector<Camera> read_cameras(const std::string& path);
-// The one camera in the file, or the one called `name` when given.
+// The one camera in the file, or the one called `name` when given; in a DaVis
+// file a mapper's CameraIdentifier ("1") finds its camera too.
 Camera read_camera(const std::string& path, const std::string& name = "");
 void write_cameras(const std::string& path, const std::vector<Camera>& cameras,
                    std::optional<CameraFileFormat> format = std::nullopt);

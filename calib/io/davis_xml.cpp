@@ -203,40 +203,54 @@ void set(pugi::xml_node node, const char* attribute, const std::string& value) {
   node.append_attribute(attribute).set_value(value.c_str());
 }
 
+// Calls `each(mapper, identifier)` for every CoordinateMapper of a DaVis file.
+void for_each_mapper(std::string_view contents, const std::string& path,
+                     const std::function<void(const pugi::xml_node&, const std::string&)>& each) {
+  pugi::xml_document doc;
+  const pugi::xml_parse_result result = doc.load_buffer(contents.data(), contents.size());
+  if (!result)
+    throw InputError(path, "",
+                     fmt::format("malformed XML, line {}: {}",
+                                 line_of_offset(contents, static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, result.offset))),
+                                 result.description()));
+  const pugi::xml_node root = doc.document_element();
+  if (std::string(root.name()) != "Calibration")
+    throw InputError(path, "",
+                     fmt::format("not a DaVis Calibration.xml: the root element is <{}>, expected <Calibration>",
+                                 root.name()));
+  const pugi::xpath_node_set mappers = root.select_nodes(".//CoordinateMapper");
+  if (mappers.empty()) throw InputError(path, "CoordinateMapper", "missing (the file has no camera)");
+  std::set<std::string> ids;
+  for (std::size_t i = 0; i < mappers.size(); ++i) {
+    const pugi::xml_node mapper = mappers[i].node();
+    const pugi::xml_attribute id_attribute = mapper.attribute("CameraIdentifier");
+    const std::string id = id_attribute ? id_attribute.value() : std::to_string(i + 1);
+    if (!ids.insert(id).second)
+      throw InputError(path, "CoordinateMapper.CameraIdentifier",
+                       fmt::format("line {}: camera identifier {} appears twice",
+                                   line_of_offset(contents, static_cast<std::size_t>(mapper.offset_debug())), id));
+    each(mapper, id);
+  }
+}
+
 }  // namespace
 
 std::vector<Camera> parse_davis_xml(std::string_view contents, const std::string& path) {
   try {
-    pugi::xml_document doc;
-    const pugi::xml_parse_result result = doc.load_buffer(contents.data(), contents.size());
-    if (!result)
-      throw InputError(path, "",
-                       fmt::format("malformed XML, line {}: {}",
-                                   line_of_offset(contents, static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, result.offset))),
-                                   result.description()));
-    const pugi::xml_node root = doc.document_element();
-    if (std::string(root.name()) != "Calibration")
-      throw InputError(path, "",
-                       fmt::format("not a DaVis Calibration.xml: the root element is <{}>, expected <Calibration>",
-                                   root.name()));
-    const pugi::xpath_node_set mappers = root.select_nodes(".//CoordinateMapper");
-    if (mappers.empty()) throw InputError(path, "CoordinateMapper", "missing (the file has no camera)");
     std::vector<Camera> cameras;
-    std::set<std::string> ids;
-    for (std::size_t i = 0; i < mappers.size(); ++i) {
-      const pugi::xml_node mapper = mappers[i].node();
-      const pugi::xml_attribute id_attribute = mapper.attribute("CameraIdentifier");
-      const std::string id = id_attribute ? id_attribute.value() : std::to_string(i + 1);
-      if (!ids.insert(id).second)
-        throw InputError(path, "CoordinateMapper.CameraIdentifier",
-                         fmt::format("line {}: camera identifier {} appears twice",
-                                     line_of_offset(contents, static_cast<std::size_t>(mapper.offset_debug())), id));
+    for_each_mapper(contents, path, [&](const pugi::xml_node& mapper, const std::string& id) {
       cameras.push_back(read_mapper(contents, path, mapper, id));
-    }
+    });
     return cameras;
   } catch (const InputError&) {
     camera_file_detail::rethrow_naming_file(path);
   }
+}
+
+std::vector<std::string> davis_camera_identifiers(std::string_view contents, const std::string& path) {
+  std::vector<std::string> ids;
+  for_each_mapper(contents, path, [&](const pugi::xml_node&, const std::string& id) { ids.push_back(id); });
+  return ids;
 }
 
 std::string format_davis_xml(const std::vector<Camera>& cameras, const std::string& path) {

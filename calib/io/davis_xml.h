@@ -12,6 +12,9 @@ namespace glasspiv {
 
 // Throws InputError naming `path` and the field for anything it cannot use.
 std::vector<Camera> parse_davis_xml(std::string_view contents, const std::string& path);
+// The CameraIdentifier of each mapper, in the order parse_davis_xml gives the
+// cameras (so `--camera 1` finds a camera whatever its name).
+std::vector<std::string> davis_camera_identifiers(std::string_view contents, const std::string& path);
 // Throws InputError naming `path` if the format cannot hold the cameras.
 std::string format_davis_xml(const std::vector<Camera>& cameras, const std::string& path);
 

@@ -224,7 +224,17 @@ std::string format_opencv_yaml(const std::vector<Camera>& cameras, const std::st
       fs << "rvec" << (cv::Mat_<double>(3, 1) << rvec.x(), rvec.y(), rvec.z());
       fs << "tvec" << (cv::Mat_<double>(3, 1) << t.x(), t.y(), t.z());
     }
-    return fs.releaseAndGetString();
+    std::string text = fs.releaseAndGetString();
+    // FileStorage leaves some texts unquoted ("[x]") that then read back as
+    // something else: refuse those names rather than write a file that fails.
+    if (!camera.name.empty()) {
+      cv::FileStorage check(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
+      const cv::FileNode n = check["camera_name"];
+      if (!n.isString() || n.string() != camera.name)
+        throw InputError(path, "camera_name",
+                         "OpenCV FileStorage cannot store the camera name '" + camera.name + "'; rename the camera");
+    }
+    return text;
   } catch (const cv::Exception& e) {
     throw InputError(path, "", "OpenCV FileStorage cannot write it: " + e.err);
   }

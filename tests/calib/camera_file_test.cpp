@@ -146,7 +146,7 @@ class CameraFileTest : public ::testing::Test {
 TEST(CameraFileRoundTrip, GlasspivYamlIsExactForEveryLensModel) {
   std::mt19937 rng(11);
   for (LensModel model : kAllModels) {
-    for (int trial = 0; trial < 12; ++trial) {
+    for (int trial = 0; trial < 40; ++trial) {
       SCOPED_TRACE(lens_model_name(model) + " trial " + std::to_string(trial));
       const Camera camera = random_camera(rng, model, trial % 2 == 0, trial % 3 != 0, "cam" + std::to_string(trial));
       const std::string text = format_cameras({camera}, CameraFileFormat::Glasspiv, "cam.yaml");
@@ -177,7 +177,7 @@ TEST(CameraFileRoundTrip, GlasspivYamlKeepsOddNames) {
 TEST(CameraFileRoundTrip, OpenCVYamlIsExactForEveryLensModel) {
   std::mt19937 rng(12);
   for (LensModel model : kAllModels) {
-    for (int trial = 0; trial < 12; ++trial) {
+    for (int trial = 0; trial < 40; ++trial) {
       SCOPED_TRACE(lens_model_name(model) + " trial " + std::to_string(trial));
       const Camera camera = random_camera(rng, model, trial % 2 == 0, trial % 3 != 0, "cam" + std::to_string(trial));
       const std::string text = format_cameras({camera}, CameraFileFormat::OpenCV, "cam.yaml");
@@ -195,7 +195,7 @@ TEST(CameraFileRoundTrip, OpenCVYamlIsExactForEveryLensModel) {
 TEST(CameraFileRoundTrip, MrcalIsExactForEveryLensModelItHas) {
   std::mt19937 rng(13);
   for (LensModel model : kMrcalModels) {
-    for (int trial = 0; trial < 12; ++trial) {
+    for (int trial = 0; trial < 40; ++trial) {
       SCOPED_TRACE(lens_model_name(model) + " trial " + std::to_string(trial));
       const Camera camera = random_camera(rng, model, trial % 2 == 0, true, "whatever");
       const std::string text = format_cameras({camera}, CameraFileFormat::Mrcal, "setup/left.cameramodel");
@@ -213,7 +213,7 @@ TEST(CameraFileRoundTrip, MrcalIsExactForEveryLensModelItHas) {
 TEST(CameraFileRoundTrip, DavisIsExactForTheModelsItHolds) {
   std::mt19937 rng(14);
   for (LensModel model : {LensModel::Pinhole, LensModel::OpenCV4, LensModel::OpenCV5, LensModel::OpenCV8}) {
-    for (int trial = 0; trial < 60; ++trial) {
+    for (int trial = 0; trial < 150; ++trial) {
       SCOPED_TRACE(lens_model_name(model) + " trial " + std::to_string(trial));
       Camera camera = random_camera(rng, model, trial % 2 == 0, true, "camera1");
       std::vector<double> d = camera.model.distortion();
@@ -282,6 +282,7 @@ TEST(CameraFileExamples, TheFourExampleFilesAreTheSameCamera) {
   EXPECT_NEAR((glasspiv.camera_from_world->inverse().translation_mm).norm(), 600.0, 1e-9);
   EXPECT_NEAR(glasspiv.camera_from_world->apply(Eigen::Vector3d::Zero()).head<2>().norm(), 0.0, 1e-9);
 
+  for (const Camera* other : {&glasspiv, &opencv, &mrcal, &davis}) EXPECT_EQ(other->name, "example");
   for (const Camera* other : {&opencv, &mrcal, &davis}) {
     expect_same_intrinsics(other->model, glasspiv.model);
     expect_same_pose(other->camera_from_world, glasspiv.camera_from_world);
@@ -359,7 +360,10 @@ TEST_F(CameraFileTest, ReadCameraPicksByName) {
   write_cameras(path, cameras);
   EXPECT_EQ(read_cameras(path).size(), 2u);
   EXPECT_EQ(read_camera(path, "camera2").model.intrinsics(), cameras[1].model.intrinsics());
-  expect_input_error([&] { read_camera(path); }, path, {"holds 2 cameras", "camera1", "camera2"});
+  EXPECT_EQ(read_camera(path, "2").name, "camera2");  // a DaVis identifier
+  // The identifier finds a camera whatever its name.
+  EXPECT_EQ(read_camera(kDataDir + "example_davis.xml", "1").name, "example");
+  expect_input_error([&] { read_camera(path); }, path, {"holds 2 cameras", "'camera1' (CameraIdentifier 1)", "camera2"});
   expect_input_error([&] { read_camera(path, "camera7"); }, path, {"name", "camera7"});
 }
 
@@ -731,6 +735,8 @@ std::vector<BadInput> bad_inputs() {
       {"negative imagersize", F::Mrcal, replace(m, "640, 480", "-640, 480"), {"imagersize[0]", "positive"}},
       {"short extrinsics", F::Mrcal, replace(m, "1.0, 2.0, 500.0,", "1.0, 2.0,"), {"extrinsics", "6 numbers"}},
       {"not a dict", F::Mrcal, "[1, 2, 3]", {"dict"}},
+      {"deep nesting", F::Mrcal, std::string(100, '['), {"nested too deeply"}},
+      {"unclosed string", F::Mrcal, replace(m, "'LENSMODEL_OPENCV4',", "'LENSMODEL_OPENCV4,"), {"line 2", "string"}},
       {"negative focal length", F::Mrcal, replace(m, "[ 600.0, 600.0,", "[ -600.0, 600.0,"), {"fx", "positive"}},
       // DaVis XML
       {"malformed XML", F::Davis, replace(d, "</Header>", "</Headr>"), {"line 3", "malformed XML"}},
@@ -769,6 +775,32 @@ TEST_F(CameraFileTest, BadInputGivesOneLineNamingFileAndField) {
       if (detect_format(bad.contents, path) == bad.format)
         expect_input_error([&] { read_cameras(path); }, path, bad.fragments);
     } catch (const InputError&) {
+    }
+  }
+}
+
+TEST(CameraFileRejections, TruncatedAndCorruptedFilesGiveInputErrorsOnly) {
+  // Whatever the damage, a reader either reads the file or throws InputError
+  // naming it; no other exception (yaml-cpp's, OpenCV's) gets through.
+  std::mt19937 rng(53);
+  for (const char* name : {"example.yaml", "example_opencv.yaml", "example.cameramodel", "example_davis.xml"}) {
+    const std::string text = read_file(kDataDir + name);
+    const CameraFileFormat format = detect_format(text, name);
+    auto check = [&](const std::string& damaged, const std::string& what) {
+      try {
+        parse_cameras(damaged, format, name);
+      } catch (const InputError& e) {
+        EXPECT_EQ(e.file(), name) << what << ": " << e.what();
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << name << " " << what << ": not an InputError: " << e.what();
+      }
+    };
+    for (std::size_t length = 0; length < text.size(); length += 5) check(text.substr(0, length), "truncated");
+    for (int trial = 0; trial < 150; ++trial) {
+      std::string damaged = text;
+      const std::size_t at = std::uniform_int_distribution<std::size_t>(0, text.size() - 1)(rng);
+      damaged[at] = "{}[]<>:,'\"#-.e0 \n\t!&"[trial % 20];
+      check(damaged, "corrupted at " + std::to_string(at));
     }
   }
 }
