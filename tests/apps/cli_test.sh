@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# End-to-end checks of the glasspiv command line: help everywhere, conversions,
+# and that bad input gives exactly one line naming the file and field, exit 2.
+# Usage: cli_test.sh GLASSPIV_EXECUTABLE SOURCE_DIR
+set -u
+glasspiv="$1"
+src="$2"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+passed=0
+failed=0
+
+ok() { passed=$((passed + 1)); }
+fail() { failed=$((failed + 1)); echo "FAIL: $*"; }
+
+# expect_error STATUS PATTERN... -- command: exit status STATUS, one stderr line matching every PATTERN.
+expect_error() {
+  local status="$1"; shift
+  local patterns=()
+  while [ "$1" != "--" ]; do patterns+=("$1"); shift; done
+  shift
+  "$@" >"$work/out" 2>"$work/err"
+  local got=$?
+  local lines
+  lines=$(wc -l <"$work/err")
+  if [ "$got" -ne "$status" ]; then fail "$* -> exit $got, expected $status ($(cat "$work/err"))"; return; fi
+  if [ "$lines" -ne 1 ]; then fail "$* -> $lines stderr lines, expected 1: $(cat "$work/err")"; return; fi
+  for p in "${patterns[@]}"; do
+    grep -q -- "$p" "$work/err" || { fail "$* -> '$(cat "$work/err")' lacks '$p'"; return; }
+  done
+  ok
+}
+
+expect_ok() {
+  if "$@" >"$work/out" 2>"$work/err"; then ok; else fail "$* -> exit $? ($(cat "$work/err"))"; fi
+}
+
+cams="$src/data/cameras"
+
+# --help on every command.
+for cmd in "" "camera" "camera convert" "camera show" "camera compare" "demo"; do
+  # shellcheck disable=SC2086
+  "$glasspiv" $cmd --help >"$work/out" 2>&1 && grep -q "Usage" "$work/out" && ok || fail "glasspiv $cmd --help"
+done
+"$glasspiv" --version | grep -q "glasspiv" && ok || fail "--version"
+
+# Conversions through every format and back, and comparisons that must be exactly zero.
+expect_ok "$glasspiv" camera convert "$cams/example.yaml" "$work/a.cameramodel"
+expect_ok "$glasspiv" camera convert "$work/a.cameramodel" "$work/b.xml" --pixel-pitch-um 6.5
+expect_ok "$glasspiv" camera convert "$work/b.xml" "$work/c.yaml" --to opencv
+expect_ok "$glasspiv" camera convert "$work/c.yaml" "$work/d.yaml"
+"$glasspiv" camera compare "$cams/example.yaml" "$work/d.yaml" >"$work/out" 2>&1
+grep -q "RMS 0 px   max 0 px" "$work/out" && ok || fail "round trip through all formats is not exact: $(cat "$work/out")"
+expect_ok "$glasspiv" camera show "$cams/wide_opencv8.yaml" --plot "$work/field.png"
+[ -s "$work/field.png" ] && ok || fail "camera show --plot wrote no PNG"
+expect_ok "$glasspiv" camera compare "$cams/example.yaml" "$cams/example_davis.xml" --use-poses --plot "$work/diff.png"
+[ -s "$work/diff.png" ] && ok || fail "camera compare --plot wrote no PNG"
+
+# Bad input: one line, the file and the field named, exit status 2, nothing written.
+printf 'glasspiv_camera: 1\nname: x\nimage_size_px: [640, 480]\nlens_model: opencv4\nfocal_length_px: [-500, 500]\nprincipal_point_px: [320, 240]\ndistortion_coefficients: [0, 0, 0, 0]\n' >"$work/neg.yaml"
+expect_error 2 "neg.yaml" "fx" -- "$glasspiv" camera show "$work/neg.yaml"
+printf 'glasspiv_camera: 1\nname: x\nimage_size_px: [640, 480]\nlens_model: opencv4\nfocal_length_px: [500, 500]\nprincipal_point_px: [320, 240]\ndistortion_coefficients: [0, 0, 0, 0]\ncolour: red\n' >"$work/unknown.yaml"
+expect_error 2 "unknown.yaml" "colour" -- "$glasspiv" camera show "$work/unknown.yaml"
+printf 'glasspiv_camera: 1\nname: x\nimage_size_px: [640, 480]\nlens_model: opencv4\nfocal_length_px: [500, 500]\nprincipal_point_px: [320, 240]\ndistortion_coefficients: [.nan, 0, 0, 0]\n' >"$work/nan.yaml"
+expect_error 2 "nan.yaml" "distortion_coefficients" "finite" -- "$glasspiv" camera show "$work/nan.yaml"
+printf 'not: [valid' >"$work/broken.yaml"
+expect_error 2 "broken.yaml" -- "$glasspiv" camera convert "$work/broken.yaml" "$work/never.yaml"
+[ ! -e "$work/never.yaml" ] && ok || fail "a failed conversion left an output file"
+expect_error 2 "does not exist" -- "$glasspiv" camera show "$work/missing.yaml"
+expect_error 2 "x.txt" "extension" -- "$glasspiv" camera convert "$work/d.yaml" "$work/x.txt"
+printf 'glasspiv_camera: 1\nname: tilted\nimage_size_px: [640, 480]\nlens_model: opencv14\nfocal_length_px: [500, 500]\nprincipal_point_px: [320, 240]\ndistortion_coefficients: [0.1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.01, 0]\n' >"$work/tilted.yaml"
+expect_error 2 "t.cameramodel" "14" -- "$glasspiv" camera convert "$work/tilted.yaml" "$work/t.cameramodel"
+expect_error 2 "never overwrites" -- "$glasspiv" camera convert "$work/d.yaml" "$work/d.yaml"
+expect_error 2 "w.xml" "k1, k2, p1, p2 only" -- "$glasspiv" camera convert "$cams/wide_opencv8.yaml" "$work/w.xml"
+expect_error 2 "p.xml" "pixel" -- "$glasspiv" camera convert "$work/a.cameramodel" "$work/p.xml"
+expect_error 2 "same sensor" -- "$glasspiv" camera compare "$cams/example.yaml" "$cams/wide_opencv8.yaml"
+expect_error 2 "--help" -- "$glasspiv" camera convert
+expect_error 2 "--help" -- "$glasspiv" frobnicate
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
