@@ -10,12 +10,16 @@
 
 #include "apps/camera_text.h"
 #include "apps/commands.h"
+#include "apps/demo_calibration.h"
 #include "apps/plots.h"
 #include "calib/io/camera_file.h"
 #include "calib/lens_maps.h"
 #include "util/atomic_file.h"
 
-namespace glasspiv::demo_data {
+namespace glasspiv::demo_cameras {
+const std::vector<std::pair<std::string_view, std::string_view>>& embedded_files();
+}
+namespace glasspiv::demo_targets {
 const std::vector<std::pair<std::string_view, std::string_view>>& embedded_files();
 }
 
@@ -38,9 +42,11 @@ void run_demo(const std::string& out_dir) {
   std::printf("glasspiv demo -> %s/\n\n", out_dir.c_str());
 
   // 1. The example camera, as each tool of the field would save it.
-  const fs::path cameras_dir = out / "cameras";
-  for (const auto& [name, contents] : demo_data::embedded_files())
+  const fs::path cameras_dir = out / "cameras", targets_dir = out / "targets";
+  for (const auto& [name, contents] : demo_cameras::embedded_files())
     write_file_atomically((cameras_dir / std::string(name)).string(), contents);
+  for (const auto& [name, contents] : demo_targets::embedded_files())
+    write_file_atomically((targets_dir / std::string(name)).string(), contents);
   const Camera reference = read_camera((cameras_dir / "example.yaml").string());
   std::fputs(describe_camera(reference).c_str(), stdout);
 
@@ -108,7 +114,19 @@ void run_demo(const std::string& out_dir) {
                       {"glasspiv YAML vs DaVis XML of the same camera", "|difference| px"}, agree_png);
   std::printf("   %-40s glasspiv vs DaVis: max %.3g px\n", agree_png.c_str(), agree.max_px);
 
-  std::printf("\nAll four formats agree to %.2g px. Next: `glasspiv camera --help`.\n", worst_px);
+  std::printf("\nAll four formats agree to %.2g px.\n", worst_px);
+
+  // 4. A calibration session on synthetic photos of a ChArUco board.
+  std::printf("\n4. Calibration session: 20 synthetic photos of a ChArUco board, then detect, fit, report:\n");
+  const std::string truth_path = (cameras_dir / "session_truth.yaml").string();
+  const DemoCalibrationSummary session =
+      run_calibration_demo((out / "session").string(), truth_path, (targets_dir / "charuco_11x8_15mm.yaml").string());
+  std::printf("   fit RMS %.3f px; focal length error %.4f%%; principal point error %.3f px\n", session.rms_px,
+              100 * session.focal_error_rel, session.principal_point_error_px);
+  std::printf("   fitted vs true camera over the image: %.4f px RMS (%.4f px after the implied rotation)\n",
+              session.truth_difference_rms_px, session.truth_difference_rotated_rms_px);
+  std::printf("   report: %s\n", session.report_html.c_str());
+  std::printf("\nNext: `glasspiv camera --help`, `glasspiv calib --help`, `glasspiv target --help`.\n");
 }
 
 }  // namespace

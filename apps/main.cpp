@@ -13,6 +13,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   glasspiv::register_camera_commands(app);
   glasspiv::register_demo_command(app);
+  glasspiv::register_target_commands(app);
+  glasspiv::register_calib_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

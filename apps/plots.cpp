@@ -48,7 +48,7 @@ Canvas draw_heat_map(const GridValues& values, int width_px, int height_px, cons
       magnitude.at<float>(j, i) = ok ? static_cast<float>(top > 0 ? std::min(1.0, v.norm() / top) : 0.0) : 0.f;
     }
   cv::Mat mag_plot, valid_plot, mag8, colour;
-  cv::resize(magnitude, mag_plot, cv::Size(pw, ph), 0, 0, cv::INTER_LINEAR);
+  cv::resize(magnitude, mag_plot, cv::Size(pw, ph), 0, 0, labels.cells ? cv::INTER_NEAREST : cv::INTER_LINEAR);
   cv::resize(valid, valid_plot, cv::Size(pw, ph), 0, 0, cv::INTER_NEAREST);
   mag_plot.convertTo(mag8, CV_8U, 255.0);
   cv::applyColorMap(mag8, colour, cv::COLORMAP_VIRIDIS);
@@ -72,8 +72,8 @@ Canvas draw_heat_map(const GridValues& values, int width_px, int height_px, cons
   text("0", {bar.x + kBarWidth + 4, bar.y + ph});
   text(labels.value_name, {bar.x - 10, bar.y + ph + 22}, 0.4);
   text(labels.title, {kMargin, 25}, 0.55);
-  text(fmt::format("RMS {:.4g} px   max {:.4g} px   {} of {} samples valid", values.rms_px, values.max_px,
-                   values.valid_count, values.grid.size()),
+  text(fmt::format("RMS {:.4g} {}   max {:.4g} {}   {} of {} samples valid", values.rms_px, labels.unit,
+                   values.max_px, labels.unit, values.valid_count, values.grid.size()),
        {kMargin, kMargin + ph + 25}, 0.45);
   return c;
 }

@@ -8,8 +8,10 @@
 namespace glasspiv {
 
 struct PlotLabels {
-  std::string title;       // top line
-  std::string value_name;  // e.g. "|difference| px"
+  std::string title;         // top line
+  std::string value_name;    // e.g. "|difference| px"
+  std::string unit = "px";   // of the summary line's RMS and max
+  bool cells = false;        // draw each sample as a flat cell (counts) instead of interpolating
 };
 
 // Colour map of |vector| over the image with a colour bar; grey where invalid.

@@ -2,7 +2,8 @@
 # Compiles the given data files into TARGET as a table of (name, bytes) so the
 # `glasspiv` executable carries its example data and runs without the source tree.
 function(glasspiv_embed_files target namespace)
-  set(out_cpp "${CMAKE_CURRENT_BINARY_DIR}/${target}_embedded.cpp")
+  string(REPLACE "::" "_" stem "${namespace}")
+  set(out_cpp "${CMAKE_CURRENT_BINARY_DIR}/${target}_${stem}_embedded.cpp")
   set(body "")
   set(entries "")
   set(index 0)

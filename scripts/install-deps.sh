@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config ccache
-  libeigen3-dev libopencv-dev libopencv-contrib-dev
+  libeigen3-dev libopencv-dev libopencv-contrib-dev libapriltag-dev
   libceres-dev libmrcal-dev python3-mrcal python3-numpy
   libyaml-cpp-dev libcli11-dev libfmt-dev nlohmann-json3-dev libpugixml-dev
   libgtest-dev libgmock-dev libtbb-dev

@@ -1,0 +1,205 @@
+// glasspiv calib intrinsics | report (and detect, registered from calib_detect_command.cpp)
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "apps/calibration_report.h"
+#include "apps/commands.h"
+#include "apps/photo_detection.h"
+#include "calib/io/camera_file.h"
+#include "targets/observations_io.h"
+#include "targets/target_yaml.h"
+#include "util/input_error.h"
+#include "util/progress_bar.h"
+
+namespace glasspiv {
+namespace {
+namespace fs = std::filesystem;
+
+struct FitCliOptions {
+  std::string lens_model = "opencv5";
+  bool fix_aspect_ratio = false, zero_tangential = false, fix_principal_point = false;
+  double outlier_k = 4.0;
+  std::string initial_camera;
+
+  IntrinsicFitOptions to_options(const Observations& observations) const {
+    IntrinsicFitOptions o;
+    o.lens_model = lens_model_from_name(lens_model);
+    o.fix_aspect_ratio = fix_aspect_ratio;
+    o.zero_tangential = zero_tangential;
+    o.fix_principal_point = fix_principal_point;
+    o.outlier_k = outlier_k;
+    if (!initial_camera.empty()) {
+      const Camera c = read_camera(initial_camera);
+      if (c.model.width_px() != observations.image_width_px || c.model.height_px() != observations.image_height_px)
+        throw InputError(initial_camera, "image size",
+                         fmt::format("is {}x{} px but the photos are {}x{} px", c.model.width_px(),
+                                     c.model.height_px(), observations.image_width_px, observations.image_height_px));
+      o.initial_camera = c.model;
+    }
+    return o;
+  }
+};
+
+void add_fit_options(CLI::App* app, FitCliOptions& o) {
+  app->add_option("--lens-model", o.lens_model, "pinhole, opencv4, opencv5, opencv8, opencv12 or opencv14")
+      ->check(CLI::IsMember({"pinhole", "opencv4", "opencv5", "opencv8", "opencv12", "opencv14"}))
+      ->capture_default_str();
+  app->add_flag("--fix-aspect-ratio", o.fix_aspect_ratio, "Hold fy/fx (1, or the initial camera's)");
+  app->add_flag("--zero-tangential", o.zero_tangential, "Hold p1 = p2 = 0");
+  app->add_flag("--fix-principal-point", o.fix_principal_point,
+                "Hold the principal point at the image centre (or the initial camera's)");
+  app->add_option("--outlier-k", o.outlier_k, "Drop corners beyond k sigma and refit; 0 keeps all")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app->add_option("--initial-camera", o.initial_camera, "Start from this camera file instead of the closed form")
+      ->check(CLI::ExistingFile);
+}
+
+bool is_observations_file(const std::string& path) {
+  const std::string ext = fs::path(path).extension().string();
+  return ext == ".yaml" || ext == ".yml" || ext == ".json";
+}
+
+struct FitOutcome {
+  IntrinsicFit fit;
+  std::optional<CrossValidation> cross_validation;
+  std::string cross_validation_note;
+};
+
+// The fit, then the cross-validation when both halves have enough views.
+FitOutcome fit_with_diagnostics(const Observations& observations, const IntrinsicFitOptions& options) {
+  ProgressBar bar("fitting", 2);
+  FitOutcome out{fit_intrinsics(observations, options), std::nullopt, ""};
+  bar.advance();
+  try {
+    out.cross_validation = cross_validation(observations, options);
+  } catch (const InputError& e) {
+    out.cross_validation_note = e.problem();
+  }
+  bar.advance();
+  bar.finish();
+  return out;
+}
+
+void print_fit(const FitOutcome& o) {
+  const IntrinsicFit& f = o.fit;
+  std::printf("fit: RMS %.4f px over %d corners (%d outliers dropped), %d views%s; %.2f s\n", f.rms_px,
+              f.inlier_count, f.outlier_count, static_cast<int>(f.view_rms_px.size() - f.skipped_views.size()),
+              f.skipped_views.empty() ? "" : fmt::format(" ({} skipped)", f.skipped_views.size()).c_str(),
+              f.total_time_s);
+  const CameraModel& m = f.camera;
+  std::printf("     fx %.6g  fy %.6g  cx %.6g  cy %.6g px  distortion [%s]\n", m.fx_px(), m.fy_px(), m.cx_px(),
+              m.cy_px(), fmt::format("{:.6g}", fmt::join(m.distortion(), ", ")).c_str());
+  if (f.intrinsics_covariance.size() > 0) {
+    const UncertaintyFigures u = uncertainty_figures(f, 1000.0);
+    std::printf("     projection uncertainty (1 sigma): centre %.4f px, worst corner %.4f px\n", u.centre_px,
+                *std::max_element(u.corners_px.begin(), u.corners_px.end()));
+  }
+  if (o.cross_validation)
+    std::printf("     cross-validation: even vs odd views differ by %.4f px RMS (%.2fx the noise's %.4f px)\n",
+                o.cross_validation->difference.rms_px, o.cross_validation->ratio,
+                o.cross_validation->expected.rms_px);
+  else
+    std::printf("     cross-validation: not possible (%s)\n", o.cross_validation_note.c_str());
+}
+
+struct IntrinsicsOptions {
+  std::vector<std::string> inputs;
+  std::string target, output, to, report_dir, observations_out, name, overlay_dir;
+  double pixel_pitch_um = 0;
+  bool no_report = false;
+  FitCliOptions fit;
+};
+
+void run_intrinsics(const IntrinsicsOptions& o) {
+  Observations observations;
+  if (o.inputs.size() == 1 && is_observations_file(o.inputs[0])) {
+    observations = read_observations(o.inputs[0]);
+  } else {
+    if (o.target.empty()) throw InputError("", "--target", "is needed to find the target in photos");
+    const TargetSpec spec = read_target_yaml(o.target);
+    PhotoDetectionOptions detection;
+    detection.overlay_dir = o.overlay_dir;
+    observations = detect_in_photos(expand_photo_inputs(o.inputs), spec, o.target, detection);
+    if (!o.observations_out.empty()) write_observations(o.observations_out, observations);
+  }
+  const CameraFileFormat format = o.to.empty() ? format_for_output_path(o.output) : format_from_name(o.to);
+  const IntrinsicFitOptions options = o.fit.to_options(observations);
+  const FitOutcome outcome = fit_with_diagnostics(observations, options);
+  print_fit(outcome);
+
+  Camera camera{o.name.empty() ? fs::path(o.output).stem().string() : o.name, outcome.fit.camera, std::nullopt,
+                std::nullopt};
+  if (o.pixel_pitch_um > 0) camera.pixel_pitch_um = o.pixel_pitch_um;
+  write_cameras(o.output, {camera}, format);
+  std::printf("wrote %s (%s)\n", o.output.c_str(), format_name(format).c_str());
+  if (!o.no_report) {
+    const std::string dir = o.report_dir.empty() ? fs::path(o.output).replace_extension("").string() + "_report"
+                                                 : o.report_dir;
+    const CalibrationReportFiles files = write_calibration_report(
+        dir, {observations, options, outcome.fit, outcome.cross_validation ? &*outcome.cross_validation : nullptr,
+              camera.name, camera.pixel_pitch_um, std::nullopt});
+    std::printf("wrote %s and %s\n", files.html.c_str(), files.metrics_json.c_str());
+  }
+}
+
+struct ReportOptions {
+  std::string observations, output_dir, name;
+  double pixel_pitch_um = 0;
+  FitCliOptions fit;
+};
+
+void run_report(const ReportOptions& o) {
+  const Observations observations = read_observations(o.observations);
+  const IntrinsicFitOptions options = o.fit.to_options(observations);
+  const FitOutcome outcome = fit_with_diagnostics(observations, options);
+  print_fit(outcome);
+  const CalibrationReportFiles files = write_calibration_report(
+      o.output_dir, {observations, options, outcome.fit, outcome.cross_validation ? &*outcome.cross_validation : nullptr,
+                     o.name.empty() ? "camera" : o.name,
+                     o.pixel_pitch_um > 0 ? std::optional<double>(o.pixel_pitch_um) : std::nullopt, std::nullopt});
+  std::printf("wrote %s and %s\n", files.html.c_str(), files.metrics_json.c_str());
+}
+
+}  // namespace
+
+void register_calib_commands(CLI::App& app) {
+  CLI::App* calib = app.add_subcommand("calib", "Calibration sessions: detect targets, fit intrinsics, report");
+  calib->require_subcommand(1);
+  register_calib_detect_command(*calib);
+
+  auto in = std::make_shared<IntrinsicsOptions>();
+  CLI::App* i = calib->add_subcommand(
+      "intrinsics", "Fit a camera's intrinsics from photos of a target (or from an observations file)");
+  i->add_option("inputs", in->inputs, "Photos, folders of photos, or one observations file (.yaml/.json)")->required();
+  i->add_option("--target", in->target, "Target spec YAML (needed for photos)")->check(CLI::ExistingFile);
+  i->add_option("-o,--output", in->output, "Camera file to write (.yaml, .cameramodel, .xml; --to opencv)")->required();
+  i->add_option("--to", in->to, "Output format: glasspiv, opencv, mrcal or davis")
+      ->check(CLI::IsMember({"glasspiv", "opencv", "mrcal", "davis"}));
+  i->add_option("--report", in->report_dir, "Report folder (default: OUTPUT without extension + _report)");
+  i->add_flag("--no-report", in->no_report, "Do not write the report");
+  i->add_option("--observations-out", in->observations_out, "Also save the detected observations (.yaml/.json)");
+  i->add_option("--overlay-dir", in->overlay_dir, "Write each photo with its detected corners as PNG here");
+  i->add_option("--name", in->name, "Camera name (default: the output file's stem)");
+  i->add_option("--pixel-pitch-um", in->pixel_pitch_um, "Sensor pixel size in um (for DaVis output)")
+      ->check(CLI::PositiveNumber);
+  add_fit_options(i, in->fit);
+  i->callback([in] { run_intrinsics(*in); });
+
+  auto rep = std::make_shared<ReportOptions>();
+  CLI::App* r = calib->add_subcommand("report", "Fit observations and write the HTML report with its pictures");
+  r->add_option("observations", rep->observations, "Observations file (.yaml/.json) from calib detect")
+      ->required()
+      ->check(CLI::ExistingFile);
+  r->add_option("-o,--output", rep->output_dir, "Report folder")->required();
+  r->add_option("--name", rep->name, "Camera name shown in the report");
+  r->add_option("--pixel-pitch-um", rep->pixel_pitch_um, "Sensor pixel size in um")->check(CLI::PositiveNumber);
+  add_fit_options(r, rep->fit);
+  r->callback([rep] { run_report(*rep); });
+}
+
+}  // namespace glasspiv

@@ -1,0 +1,33 @@
+#pragma once
+// The calibration report: an HTML page with the pictures (residual field,
+// coverage, projection uncertainty, distortion, cross-validation) and the numbers
+// (parameters with their 1-sigma, RMS, outliers, per-view residuals), plus a
+// metrics JSON. Written into one folder, every file atomically.
+#include <optional>
+#include <string>
+
+#include "calib/camera.h"
+#include "calib/fit/calibration_diagnostics.h"
+#include "calib/fit/intrinsic_fit.h"
+#include "calib/observations.h"
+
+namespace glasspiv {
+
+struct CalibrationReportInputs {
+  const Observations& observations;
+  const IntrinsicFitOptions& options;
+  const IntrinsicFit& fit;
+  const CrossValidation* cross_validation = nullptr;  // absent when too few views
+  std::string camera_name;
+  std::optional<double> pixel_pitch_um;
+  std::optional<Camera> truth;  // synthetic sessions: the camera the photos were made with
+  double uncertainty_distance_mm = 1000;
+};
+
+struct CalibrationReportFiles {
+  std::string html, metrics_json;
+};
+
+CalibrationReportFiles write_calibration_report(const std::string& folder, const CalibrationReportInputs& in);
+
+}  // namespace glasspiv

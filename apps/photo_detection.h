@@ -1,0 +1,31 @@
+#pragma once
+// Finding a target in a set of photos: loading (8/16-bit, grey or colour),
+// detection, a progress bar, a line per photo, optional overlay pictures, and the
+// checks a session needs (one sensor size; the target found at least once).
+// Shared by `calib detect`, `calib intrinsics` and the demo.
+#include <string>
+#include <vector>
+
+#include "calib/observations.h"
+#include "targets/target_spec.h"
+
+namespace glasspiv {
+
+struct PhotoDetectionOptions {
+  std::string overlay_dir;      // write each photo with its corners and ids as PNG here ("" = none)
+  bool lenient_layout = false;  // ChArUco even rows: keep views that do not prove the layout
+  bool quiet = false;           // no per-photo lines on stdout
+};
+
+// Photos named directly, and the image files (tif, tiff, png, jpg, jpeg, bmp)
+// inside folders, sorted by name. InputError for a path that does not exist or a
+// folder without images.
+std::vector<std::string> expand_photo_inputs(const std::vector<std::string>& inputs);
+
+// Detects `spec` in every photo. `target_path` names the spec in errors.
+// Throws InputError for an unreadable photo (naming it), photos of different
+// sizes (naming the file and both sizes), or a target found in none of them.
+Observations detect_in_photos(const std::vector<std::string>& photos, const TargetSpec& spec,
+                              const std::string& target_path, const PhotoDetectionOptions& options);
+
+}  // namespace glasspiv

@@ -1,0 +1,121 @@
+// glasspiv target print | show
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "apps/commands.h"
+#include "targets/target_image.h"
+#include "targets/target_spec.h"
+#include "targets/target_yaml.h"
+#include "util/input_error.h"
+
+namespace glasspiv {
+namespace {
+namespace fs = std::filesystem;
+
+struct PrintOptions {
+  std::string spec, svg, png;
+  double dpi = 300;
+};
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+void check_not_input(const std::string& input, const std::string& output) {
+  std::error_code ec;
+  if (fs::exists(output, ec) && fs::equivalent(input, output, ec))
+    throw InputError(output, "", "is the input file; glasspiv never overwrites its inputs");
+}
+
+void run_print(const PrintOptions& o) {
+  if (o.svg.empty() && o.png.empty()) throw InputError("", "-o", "give -o BOARD.svg, --png BOARD.png or both");
+  if (!o.svg.empty() && lower_extension(o.svg) != ".svg")
+    throw InputError(o.svg, "-o", "must end in .svg: glasspiv writes SVG (and PNG with --png), no PDF; convert the "
+                                  "SVG with e.g. rsvg-convert or Inkscape if you need one");
+  if (!o.png.empty() && lower_extension(o.png) != ".png") throw InputError(o.png, "--png", "must end in .png");
+  if (!(o.dpi > 0) || o.dpi > 2400) throw InputError("", "--dpi", fmt::format("must be in (0, 2400], got {}", o.dpi));
+  const TargetSpec spec = read_target_yaml(o.spec);
+  std::printf("%s\n", describe_target(spec).c_str());
+  if (!o.svg.empty()) {
+    check_not_input(o.spec, o.svg);
+    write_target_svg(o.svg, spec);
+    const Eigen::Vector2d page = target_svg_size_mm(spec);
+    std::printf("wrote %s: %.1f x %.1f mm page. Print at 100 %% scale (no \"fit to page\") and check that the bar "
+                "under the board measures 100 mm.\n",
+                o.svg.c_str(), page.x(), page.y());
+  }
+  if (!o.png.empty()) {
+    check_not_input(o.spec, o.png);
+    write_target_png(o.png, spec, o.dpi);
+    const Eigen::Vector2d board = board_size_mm(spec);
+    const double margin = default_margin_mm(spec);
+    std::printf("wrote %s at %g dpi (%.1f x %.1f mm with its margin; the resolution is stored in the PNG, which has "
+                "no caption or scale bar: measure a square after printing)\n",
+                o.png.c_str(), o.dpi, board.x() + 2 * margin, board.y() + 2 * margin);
+  }
+}
+
+void run_show(const std::string& path) {
+  const TargetSpec spec = read_target_yaml(path);
+  const Eigen::Vector2d size = board_size_mm(spec);
+  std::printf("target '%s' (%s)\n", spec.name.c_str(), path.c_str());
+  TargetSpec unnamed = spec;
+  unnamed.name.clear();
+  std::printf("  %s\n", describe_target(unnamed).c_str());
+  std::printf("  pattern %g x %g mm (without margin); printed with a %g mm white margin\n", size.x(), size.y(),
+              default_margin_mm(spec));
+  const std::size_t corners = board_corner_count(spec);
+  int w = 0, h = 0;
+  double spacing = 0;
+  if (corner_grid(spec, w, h, spacing))
+    std::printf("  %zu corners: a %d x %d grid, %g mm apart, ids row by row from the top-left (id 0 at %g, %g mm)\n",
+                corners, w, h, spacing, spacing, spacing);
+  else
+    std::printf("  %zu corners: 4 per tag (top-left, top-right, bottom-right, bottom-left), id = 4 * tag index + "
+                "corner\n",
+                corners);
+  const std::vector<BoardMarker> markers = board_markers(spec);
+  if (!markers.empty())
+    std::printf("  %zu %s, ids %d to %d\n", markers.size(), spec.kind == TargetKind::aprilgrid ? "tags" : "markers",
+                markers.front().id, markers.back().id);
+  if (spec.kind == TargetKind::charuco) {
+    if (spec.squares_y % 2 == 0) {
+      const std::string corner = square_is_black(spec, 0, 0)
+                                     ? std::string("black (OpenCV >= 4.6.0)")
+                                     : fmt::format("white with marker {} (OpenCV < 4.6.0)", spec.first_id);
+      std::printf("  %d rows (even): the %s layout, top-left square %s\n", spec.squares_y,
+                  charuco_layout_name(spec.charuco_layout).c_str(), corner.c_str());
+    } else {
+      std::printf("  %d rows (odd): the opencv and legacy layouts are the same board\n", spec.squares_y);
+    }
+  }
+}
+
+}  // namespace
+
+void register_target_commands(CLI::App& app) {
+  CLI::App* target = app.add_subcommand("target", "Calibration targets: print a board, show a target spec");
+  target->require_subcommand(1);
+
+  auto print = std::make_shared<PrintOptions>();
+  CLI::App* p = target->add_subcommand(
+      "print", "Draw a target spec as an SVG at exact scale (caption and 100 mm check bar) and/or a PNG at --dpi. "
+               "SVG and PNG only: no PDF");
+  p->add_option("spec", print->spec, "Target spec YAML (docs/targets.md)")->required()->check(CLI::ExistingFile);
+  p->add_option("-o,--output", print->svg, "SVG to write (mm units, print at 100 %)");
+  p->add_option("--png", print->png, "PNG to write as well (board and margin only)");
+  p->add_option("--dpi", print->dpi, "Resolution of the PNG, dots per inch")->capture_default_str();
+  p->callback([print] { run_print(*print); });
+
+  auto show = std::make_shared<std::string>();
+  CLI::App* s = target->add_subcommand("show", "Print a target spec: kind, size in mm, corners, markers, layout");
+  s->add_option("spec", *show, "Target spec YAML")->required()->check(CLI::ExistingFile);
+  s->callback([show] { run_show(*show); });
+}
+
+}  // namespace glasspiv

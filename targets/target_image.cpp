@@ -1,0 +1,285 @@
+#include "targets/target_image.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include <fmt/format.h>
+#include <opencv2/aruco/dictionary.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "util/atomic_file.h"
+#include "util/input_error.h"
+
+namespace glasspiv {
+namespace {
+
+constexpr double kScaleBarMm = 100.0;
+constexpr double kMaxMegapixels = 500.0;
+
+cv::Ptr<cv::aruco::Dictionary> marker_dictionary(const TargetSpec& spec) {
+  const std::string name = spec.kind == TargetKind::aprilgrid ? "DICT_APRILTAG_36h11" : spec.dictionary;
+  return cv::aruco::getPredefinedDictionary(opencv_dictionary_id(name));
+}
+
+// Text for SVG: shortest exact decimal, rounded to 1 nm so sums like 0.1 + 0.2
+// print as 0.3.
+std::string mm(double value) {
+  double rounded = std::round(value * 1e6) / 1e6;
+  if (rounded == 0) rounded = 0;  // no "-0"
+  return fmt::format("{}", rounded);
+}
+
+std::string xml_escape(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\n': case '\r': case '\t': out += ' '; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+double resolve_margin(const TargetSpec& spec, double margin_mm) {
+  return margin_mm < 0 ? default_margin_mm(spec) : margin_mm;
+}
+
+// Caption lines under the SVG's pattern.
+std::vector<std::string> caption_lines(const TargetSpec& spec) {
+  std::vector<std::string> lines;
+  lines.push_back(spec.name.empty() ? "glasspiv calibration target" : "glasspiv calibration target '" + spec.name + "'");
+  switch (spec.kind) {
+    case TargetKind::chessboard:
+      lines.push_back(fmt::format("chessboard, {} x {} squares, square {} mm ({} x {} inner corners)",
+                                  spec.squares_x, spec.squares_y, mm(spec.square_size_mm), spec.squares_x - 1,
+                                  spec.squares_y - 1));
+      break;
+    case TargetKind::charuco:
+      lines.push_back(fmt::format("charuco, {} x {} squares, square {} mm, marker {} mm", spec.squares_x,
+                                  spec.squares_y, mm(spec.square_size_mm), mm(spec.marker_size_mm)));
+      lines.push_back(fmt::format("dictionary {}, first id {}, {} layout", spec.dictionary, spec.first_id,
+                                  charuco_layout_name(spec.charuco_layout)));
+      break;
+    case TargetKind::aprilgrid:
+      lines.push_back(fmt::format("aprilgrid, {} x {} tags, tag {} mm, spacing {} mm", spec.squares_x, spec.squares_y,
+                                  mm(spec.square_size_mm), mm(spec.marker_size_mm)));
+      lines.push_back(fmt::format("dictionary {}, first id {}", spec.dictionary, spec.first_id));
+      break;
+  }
+  lines.push_back("print at 100% scale; check: this bar is 100 mm");
+  return lines;
+}
+
+// Caption layout, mm: 3 mm text on 4 mm lines, then the bar and its ticks.
+constexpr double kCaptionFontMm = 3.0;
+constexpr double kCaptionLineMm = 4.0;
+constexpr double kBarGapMm = 2.0;
+constexpr double kBarHeightMm = 2.0;
+constexpr double kTickMm = 3.0;
+
+double caption_height_mm(const TargetSpec& spec) {
+  return caption_lines(spec).size() * kCaptionLineMm + kBarGapMm + kBarHeightMm + kTickMm + 1.5;
+}
+
+// PNG with a pHYs chunk, so viewers and printers know the resolution.
+std::uint32_t crc32(const unsigned char* data, std::size_t size) {
+  static const std::array<std::uint32_t, 256> table = [] {
+    std::array<std::uint32_t, 256> t{};
+    for (std::uint32_t n = 0; n < 256; ++n) {
+      std::uint32_t c = n;
+      for (int k = 0; k < 8; ++k) c = (c & 1) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+      t[n] = c;
+    }
+    return t;
+  }();
+  std::uint32_t c = 0xFFFFFFFFu;
+  for (std::size_t i = 0; i < size; ++i) c = table[(c ^ data[i]) & 0xFF] ^ (c >> 8);
+  return c ^ 0xFFFFFFFFu;
+}
+
+void put_u32(std::vector<unsigned char>& out, std::uint32_t v) {
+  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<unsigned char>(v >> shift));
+}
+
+std::vector<unsigned char> png_with_dpi(const cv::Mat& image, double dpi) {
+  std::vector<unsigned char> png;
+  if (!cv::imencode(".png", image, png)) throw InputError("", "", "PNG encoding failed");
+  // Signature (8 bytes) then IHDR: length (4) + type (4) + 13 data + CRC (4).
+  const std::size_t after_ihdr = 8 + 4 + 4 + 13 + 4;
+  std::vector<unsigned char> chunk;
+  put_u32(chunk, 9);
+  const std::size_t type_at = chunk.size();
+  for (const char c : {'p', 'H', 'Y', 's'}) chunk.push_back(static_cast<unsigned char>(c));
+  const auto per_metre = static_cast<std::uint32_t>(std::lround(dpi / 0.0254));
+  put_u32(chunk, per_metre);
+  put_u32(chunk, per_metre);
+  chunk.push_back(1);  // unit: metre
+  put_u32(chunk, crc32(chunk.data() + type_at, chunk.size() - type_at));
+  png.insert(png.begin() + static_cast<std::ptrdiff_t>(after_ihdr), chunk.begin(), chunk.end());
+  return png;
+}
+
+}  // namespace
+
+std::vector<BoardRect> target_black_rects(const TargetSpec& spec) {
+  std::vector<BoardRect> rects;
+  if (spec.kind != TargetKind::aprilgrid) {
+    const double s = spec.square_size_mm;
+    for (int r = 0; r < spec.squares_y; ++r)
+      for (int c = 0; c < spec.squares_x; ++c)
+        if (square_is_black(spec, c, r)) rects.push_back({c * s, r * s, (c + 1) * s, (r + 1) * s});
+  }
+  if (spec.kind == TargetKind::chessboard) return rects;
+  const cv::Ptr<cv::aruco::Dictionary> dictionary = marker_dictionary(spec);
+  const int cells = dictionary->markerSize + 2;  // data bits and the one-bit black border
+  for (const BoardMarker& m : board_markers(spec)) {
+    cv::Mat bits;
+    dictionary->drawMarker(m.id, cells, bits, 1);  // one pixel per cell, 0 = black
+    const double cell = m.size_mm / cells;
+    for (int y = 0; y < cells; ++y) {
+      for (int x = 0; x < cells;) {
+        if (bits.at<unsigned char>(y, x) != 0) {
+          ++x;
+          continue;
+        }
+        int end = x;
+        while (end < cells && bits.at<unsigned char>(y, end) == 0) ++end;
+        rects.push_back({m.top_left_mm.x() + x * cell, m.top_left_mm.y() + y * cell, m.top_left_mm.x() + end * cell,
+                         m.top_left_mm.y() + (y + 1) * cell});
+        x = end;
+      }
+    }
+  }
+  return rects;
+}
+
+double default_margin_mm(const TargetSpec& spec) {
+  if (spec.kind == TargetKind::aprilgrid) return std::max(spec.marker_size_mm, spec.square_size_mm / 4);
+  return spec.square_size_mm / 2;
+}
+
+Eigen::Vector2d TargetRender::pixel_from_board(const Eigen::Vector2d& board_mm) const {
+  return (board_mm.array() + margin_mm) * px_per_mm - 0.5;
+}
+
+Eigen::Vector2d TargetRender::board_from_pixel(const Eigen::Vector2d& pixel) const {
+  return (pixel.array() + 0.5) / px_per_mm - margin_mm;
+}
+
+TargetRender render_target(const TargetSpec& spec, double px_per_mm, double margin_mm) {
+  validate_target(spec);
+  if (!std::isfinite(px_per_mm) || !(px_per_mm > 0))
+    throw InputError("", "resolution", fmt::format("must be positive, got {} px/mm", px_per_mm));
+  if (!std::isfinite(margin_mm) || margin_mm < 0)
+    throw InputError("", "margin", fmt::format("must be 0 mm or more, got {}", margin_mm));
+  const Eigen::Vector2d size = board_size_mm(spec);
+  const double w = std::ceil((size.x() + 2 * margin_mm) * px_per_mm - 1e-9);
+  const double h = std::ceil((size.y() + 2 * margin_mm) * px_per_mm - 1e-9);
+  if (w * h > kMaxMegapixels * 1e6)
+    throw InputError("", "resolution",
+                     fmt::format("{} px/mm makes a {:.0f} x {:.0f} px picture, over {} megapixels", px_per_mm, w, h,
+                                 kMaxMegapixels));
+  TargetRender render;
+  render.px_per_mm = px_per_mm;
+  render.margin_mm = margin_mm;
+  cv::Mat ink(static_cast<int>(h), static_cast<int>(w), CV_32F, cv::Scalar(0));
+  // Pixel (i, j) covers [i, i + 1] x [j, j + 1] in edge coordinates E = (x + margin) * px_per_mm.
+  for (const BoardRect& r : target_black_rects(spec)) {
+    const double ex0 = (r.x0 + margin_mm) * px_per_mm, ex1 = (r.x1 + margin_mm) * px_per_mm;
+    const double ey0 = (r.y0 + margin_mm) * px_per_mm, ey1 = (r.y1 + margin_mm) * px_per_mm;
+    const int i0 = std::max(0, static_cast<int>(std::floor(ex0)));
+    const int i1 = std::min(ink.cols, static_cast<int>(std::ceil(ex1)));
+    const int j0 = std::max(0, static_cast<int>(std::floor(ey0)));
+    const int j1 = std::min(ink.rows, static_cast<int>(std::ceil(ey1)));
+    for (int j = j0; j < j1; ++j) {
+      const double wy = std::min(ey1, j + 1.0) - std::max(ey0, static_cast<double>(j));
+      float* row = ink.ptr<float>(j);
+      for (int i = i0; i < i1; ++i) {
+        const double wx = std::min(ex1, i + 1.0) - std::max(ex0, static_cast<double>(i));
+        row[i] += static_cast<float>(wx * wy);
+      }
+    }
+  }
+  render.image.create(ink.rows, ink.cols, CV_8UC1);
+  for (int j = 0; j < ink.rows; ++j) {
+    const float* in = ink.ptr<float>(j);
+    unsigned char* out = render.image.ptr<unsigned char>(j);
+    for (int i = 0; i < ink.cols; ++i)
+      out[i] = static_cast<unsigned char>(std::lround(255.0 * (1.0 - std::clamp(static_cast<double>(in[i]), 0.0, 1.0))));
+  }
+  return render;
+}
+
+Eigen::Vector2d target_svg_size_mm(const TargetSpec& spec, double margin_mm) {
+  const double margin = resolve_margin(spec, margin_mm);
+  const Eigen::Vector2d board = board_size_mm(spec);
+  const double content_w = std::max(board.x(), kScaleBarMm + 10.0);
+  return Eigen::Vector2d(content_w + 2 * margin, board.y() + 2 * margin + caption_height_mm(spec));
+}
+
+std::string target_svg(const TargetSpec& spec, double margin_mm) {
+  validate_target(spec);
+  const double margin = resolve_margin(spec, margin_mm);
+  if (!std::isfinite(margin)) throw InputError("", "margin", "must be finite");
+  const Eigen::Vector2d page = target_svg_size_mm(spec, margin);
+  const Eigen::Vector2d board = board_size_mm(spec);
+  const std::vector<std::string> lines = caption_lines(spec);
+
+  std::string svg;
+  svg += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  svg += fmt::format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"{}mm\" height=\"{}mm\" "
+      "viewBox=\"0 0 {} {}\">\n",
+      mm(page.x()), mm(page.y()), mm(page.x()), mm(page.y()));
+  svg += "<title>" + xml_escape(describe_target(spec)) + "</title>\n";
+  svg += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#ffffff\"/>\n", mm(page.x()),
+                     mm(page.y()));
+  svg += "<g id=\"pattern\" fill=\"#000000\" stroke=\"none\">\n";
+  for (const BoardRect& r : target_black_rects(spec))
+    svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/>\n", mm(r.x0 + margin), mm(r.y0 + margin),
+                       mm(r.x1 - r.x0), mm(r.y1 - r.y0));
+  svg += "</g>\n";
+
+  // Caption: below the pattern's margin.
+  const double x = margin;
+  double y = board.y() + 2 * margin;
+  svg += fmt::format("<g id=\"caption\" font-family=\"sans-serif\" font-size=\"{}\" fill=\"#000000\">\n",
+                     mm(kCaptionFontMm));
+  for (const std::string& line : lines) {
+    y += kCaptionLineMm;
+    svg += fmt::format("<text x=\"{}\" y=\"{}\">{}</text>\n", mm(x), mm(y), xml_escape(line));
+  }
+  svg += "</g>\n";
+  y += kBarGapMm;
+  svg += "<g id=\"scale-bar\" fill=\"#000000\" stroke=\"none\">\n";
+  svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/>\n", mm(x), mm(y), mm(kScaleBarMm),
+                     mm(kBarHeightMm));
+  // Ticks every 10 mm below the bar, the ends longer.
+  for (int k = 0; k <= 10; ++k) {
+    const double tick = 0.3, length = (k == 0 || k == 10) ? kTickMm : kTickMm / 2;
+    const double tx = std::clamp(x + 10.0 * k - tick / 2, x, x + kScaleBarMm - tick);
+    svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/>\n", mm(tx), mm(y + kBarHeightMm),
+                       mm(tick), mm(length));
+  }
+  svg += "</g>\n</svg>\n";
+  return svg;
+}
+
+void write_target_svg(const std::string& path, const TargetSpec& spec) {
+  write_file_atomically(path, target_svg(spec));
+}
+
+void write_target_png(const std::string& path, const TargetSpec& spec, double dpi) {
+  if (!std::isfinite(dpi) || !(dpi > 0)) throw InputError("", "--dpi", fmt::format("must be positive, got {}", dpi));
+  const TargetRender render = render_target(spec, dpi / 25.4, default_margin_mm(spec));
+  const std::vector<unsigned char> png = png_with_dpi(render.image, dpi);
+  write_file_atomically(path, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
+}
+
+}  // namespace glasspiv

@@ -1,0 +1,57 @@
+#pragma once
+// Pictures of a target: an 8-bit raster (for PNG printing and for synthesising
+// photos) and an SVG at exact scale for printing. Both draw the same black
+// rectangles, target_black_rects().
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "targets/target_spec.h"
+
+namespace glasspiv {
+
+// An axis-aligned black rectangle on the board, mm, board frame.
+struct BoardRect {
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+// The black squares, and the black cells of every marker or tag (each row of a
+// marker's adjacent black cells merged into one rectangle). They do not overlap.
+std::vector<BoardRect> target_black_rects(const TargetSpec& spec);
+
+// The white margin pictures get by default, the quiet zone the detectors need
+// around the pattern: half a square (chessboard, charuco), or the gap between
+// tags but at least two of their bits (aprilgrid).
+double default_margin_mm(const TargetSpec& spec);
+
+struct TargetRender {
+  cv::Mat image;  // CV_8UC1, 255 = white paper, 0 = black ink
+  double px_per_mm = 0;
+  double margin_mm = 0;
+  // Board point (mm) -> pixel of `image` in glasspiv's convention ((0, 0) = the
+  // centre of the top-left pixel); the board's origin is at the margin's inner
+  // edge: u = (x + margin) * px_per_mm - 0.5.
+  Eigen::Vector2d pixel_from_board(const Eigen::Vector2d& board_mm) const;
+  Eigen::Vector2d board_from_pixel(const Eigen::Vector2d& pixel) const;
+};
+
+// Renders the board at `px_per_mm` with a white margin. Each pixel is the exact
+// area average of the ink over its square (box filter), so the picture has no
+// half-pixel bias at any scale. Throws InputError (field "resolution") for a
+// non-positive resolution or a picture over 500 megapixels.
+TargetRender render_target(const TargetSpec& spec, double px_per_mm, double margin_mm);
+
+// An SVG at exact scale: width and height in mm, viewBox in mm, the pattern as
+// <rect>s, below it a caption (kind, squares, sizes, dictionary, first id,
+// layout) and a 100 mm scale bar to check the print. margin_mm < 0: default.
+std::string target_svg(const TargetSpec& spec, double margin_mm = -1);
+
+// The SVG page size (width, height) in mm that target_svg() writes.
+Eigen::Vector2d target_svg_size_mm(const TargetSpec& spec, double margin_mm = -1);
+
+// Writers (atomic): the SVG, and a PNG rendered at `dpi` with the default margin.
+void write_target_svg(const std::string& path, const TargetSpec& spec);
+void write_target_png(const std::string& path, const TargetSpec& spec, double dpi);
+
+}  // namespace glasspiv

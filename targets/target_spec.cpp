@@ -1,0 +1,258 @@
+#include "targets/target_spec.h"
+
+#include <cmath>
+
+#include <fmt/format.h>
+#include <opencv2/aruco/dictionary.hpp>
+
+#include "util/input_error.h"
+
+namespace glasspiv {
+namespace {
+
+struct DictionaryName {
+  const char* name;
+  int id;
+};
+
+const DictionaryName kDictionaries[] = {
+    {"DICT_4X4_50", cv::aruco::DICT_4X4_50},
+    {"DICT_4X4_100", cv::aruco::DICT_4X4_100},
+    {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
+    {"DICT_4X4_1000", cv::aruco::DICT_4X4_1000},
+    {"DICT_5X5_50", cv::aruco::DICT_5X5_50},
+    {"DICT_5X5_100", cv::aruco::DICT_5X5_100},
+    {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
+    {"DICT_5X5_1000", cv::aruco::DICT_5X5_1000},
+    {"DICT_6X6_50", cv::aruco::DICT_6X6_50},
+    {"DICT_6X6_100", cv::aruco::DICT_6X6_100},
+    {"DICT_6X6_250", cv::aruco::DICT_6X6_250},
+    {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
+    {"DICT_7X7_50", cv::aruco::DICT_7X7_50},
+    {"DICT_7X7_100", cv::aruco::DICT_7X7_100},
+    {"DICT_7X7_250", cv::aruco::DICT_7X7_250},
+    {"DICT_7X7_1000", cv::aruco::DICT_7X7_1000},
+    {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL},
+    {"DICT_APRILTAG_16h5", cv::aruco::DICT_APRILTAG_16h5},
+    {"DICT_APRILTAG_25h9", cv::aruco::DICT_APRILTAG_25h9},
+    {"DICT_APRILTAG_36h10", cv::aruco::DICT_APRILTAG_36h10},
+    {"DICT_APRILTAG_36h11", cv::aruco::DICT_APRILTAG_36h11},
+};
+
+constexpr int kMaxSquares = 200;
+constexpr double kMaxSizeMm = 10000.0;
+constexpr int kTag36h11Codes = 587;
+
+// Field names as the target YAML spells them (docs/targets.md).
+const char* squares_field(const TargetSpec& s) { return s.kind == TargetKind::aprilgrid ? "tags" : "squares"; }
+const char* size_field(const TargetSpec& s) {
+  return s.kind == TargetKind::aprilgrid ? "tag_size_mm" : "square_size_mm";
+}
+bool legacy_even(const TargetSpec& s) {
+  return s.kind == TargetKind::charuco && s.charuco_layout == CharucoLayout::legacy && s.squares_y % 2 == 0;
+}
+
+int marker_count(const TargetSpec& s) {
+  if (s.kind == TargetKind::aprilgrid) return s.squares_x * s.squares_y;
+  if (s.kind == TargetKind::chessboard) return 0;
+  int n = 0;
+  for (int r = 0; r < s.squares_y; ++r)
+    for (int c = 0; c < s.squares_x; ++c) n += square_is_black(s, c, r) ? 0 : 1;
+  return n;
+}
+
+}  // namespace
+
+std::string target_kind_name(TargetKind kind) {
+  switch (kind) {
+    case TargetKind::chessboard: return "chessboard";
+    case TargetKind::charuco: return "charuco";
+    case TargetKind::aprilgrid: return "aprilgrid";
+  }
+  return "?";
+}
+
+std::string charuco_layout_name(CharucoLayout layout) {
+  return layout == CharucoLayout::legacy ? "legacy" : "opencv";
+}
+
+int opencv_dictionary_id(const std::string& name) {
+  for (const auto& d : kDictionaries)
+    if (name == d.name) return d.id;
+  return -1;
+}
+
+std::string opencv_dictionary_names() {
+  std::string list;
+  for (const auto& d : kDictionaries) list += (list.empty() ? "" : ", ") + std::string(d.name);
+  return list;
+}
+
+int opencv_dictionary_size(const std::string& name) {
+  const int id = opencv_dictionary_id(name);
+  if (id < 0) return 0;
+  return cv::aruco::getPredefinedDictionary(id)->bytesList.rows;
+}
+
+void validate_target(const TargetSpec& s, const std::string& file) {
+  auto fail = [&](const std::string& field, const std::string& problem) { throw InputError(file, field, problem); };
+  const std::string kind = target_kind_name(s.kind);
+
+  const int min_squares = s.kind == TargetKind::chessboard ? 4 : s.kind == TargetKind::charuco ? 3 : 2;
+  for (const int n : {s.squares_x, s.squares_y}) {
+    if (n < min_squares)
+      fail(squares_field(s),
+           fmt::format("[{}, {}]: a {} needs at least {} {} across and down{}", s.squares_x, s.squares_y, kind,
+                       min_squares, s.kind == TargetKind::aprilgrid ? "tags" : "squares",
+                       s.kind == TargetKind::chessboard ? " (OpenCV finds at least 3 x 3 inner corners)" : ""));
+    if (n > kMaxSquares)
+      fail(squares_field(s), fmt::format("[{}, {}]: more than {} across or down; is this a typo?", s.squares_x,
+                                         s.squares_y, kMaxSquares));
+  }
+  if (!std::isfinite(s.square_size_mm) || !(s.square_size_mm > 0))
+    fail(size_field(s), fmt::format("must be a positive length in mm, got {}", s.square_size_mm));
+  if (s.square_size_mm > kMaxSizeMm)
+    fail(size_field(s), fmt::format("{} mm is more than {} mm; the unit is mm", s.square_size_mm, kMaxSizeMm));
+
+  switch (s.kind) {
+    case TargetKind::chessboard:
+      if ((s.squares_x + s.squares_y) % 2 == 0)
+        fail("squares", fmt::format("[{}, {}]: one count must be odd and the other even, else the board looks the "
+                                    "same turned by 180 degrees and its corner ids are ambiguous",
+                                    s.squares_x, s.squares_y));
+      if (s.marker_size_mm != 0) fail("marker_size_mm", "a chessboard has no markers");
+      if (!s.dictionary.empty()) fail("dictionary", "a chessboard has no markers");
+      if (s.first_id != 0) fail("first_id", "a chessboard has no markers");
+      if (s.charuco_layout != CharucoLayout::opencv) fail("charuco_layout", "applies to charuco boards only");
+      return;
+    case TargetKind::charuco: {
+      if (!std::isfinite(s.marker_size_mm) || !(s.marker_size_mm > 0))
+        fail("marker_size_mm", fmt::format("must be a positive length in mm, got {}", s.marker_size_mm));
+      if (!(s.marker_size_mm < s.square_size_mm))
+        fail("marker_size_mm", fmt::format("{} mm must be smaller than the square ({} mm)", s.marker_size_mm,
+                                           s.square_size_mm));
+      const int size = opencv_dictionary_size(s.dictionary);
+      if (size == 0)
+        fail("dictionary", fmt::format("'{}' is not an OpenCV dictionary (known: {})", s.dictionary,
+                                       opencv_dictionary_names()));
+      if (s.first_id < 0) fail("first_id", fmt::format("must be 0 or more, got {}", s.first_id));
+      const int n = marker_count(s);
+      if (static_cast<long long>(s.first_id) + n > size)
+        fail("first_id", fmt::format("the board needs {} markers, ids {} to {}, but {} has only ids 0 to {}", n,
+                                     s.first_id, static_cast<long long>(s.first_id) + n - 1, s.dictionary,
+                                     size - 1));
+      return;
+    }
+    case TargetKind::aprilgrid: {
+      if (!std::isfinite(s.marker_size_mm) || s.marker_size_mm < 0)
+        fail("tag_spacing_mm", fmt::format("must be a length in mm, got {}", s.marker_size_mm));
+      // libapriltag needs a white border of one bit around each tag's black square;
+      // neighbours may share it.
+      if (s.marker_size_mm < s.square_size_mm / 8 * (1 - 1e-9))
+        fail("tag_spacing_mm", fmt::format("{} mm is narrower than one bit of the tag ({} mm / 8 = {} mm): the tags "
+                                           "need a white border that wide",
+                                           s.marker_size_mm, s.square_size_mm, s.square_size_mm / 8));
+      if (s.marker_size_mm > kMaxSizeMm)
+        fail("tag_spacing_mm", fmt::format("{} mm is more than {} mm; the unit is mm", s.marker_size_mm, kMaxSizeMm));
+      if (s.dictionary != "tag36h11")
+        fail("dictionary", fmt::format("'{}': an aprilgrid uses tag36h11", s.dictionary));
+      if (s.first_id < 0) fail("first_id", fmt::format("must be 0 or more, got {}", s.first_id));
+      const int n = marker_count(s);
+      if (static_cast<long long>(s.first_id) + n > kTag36h11Codes)
+        fail("first_id", fmt::format("the grid needs {} tags, ids {} to {}, but tag36h11 has only ids 0 to {}", n,
+                                     s.first_id, static_cast<long long>(s.first_id) + n - 1, kTag36h11Codes - 1));
+      if (s.charuco_layout != CharucoLayout::opencv) fail("charuco_layout", "applies to charuco boards only");
+      return;
+    }
+  }
+}
+
+bool square_is_black(const TargetSpec& s, int col, int row) {
+  const bool even = (col + row) % 2 == 0;
+  return legacy_even(s) ? !even : even;
+}
+
+std::vector<BoardCorner> board_corners(const TargetSpec& s) {
+  std::vector<BoardCorner> corners;
+  if (s.kind == TargetKind::aprilgrid) {
+    const double t = s.square_size_mm, pitch = s.square_size_mm + s.marker_size_mm;
+    const double dx[4] = {0, t, t, 0}, dy[4] = {0, 0, t, t};
+    for (int r = 0; r < s.squares_y; ++r)
+      for (int c = 0; c < s.squares_x; ++c)
+        for (int k = 0; k < 4; ++k) {
+          const int index = r * s.squares_x + c;
+          corners.push_back({4 * index + k, Eigen::Vector3d(c * pitch + dx[k], r * pitch + dy[k], 0)});
+        }
+    return corners;
+  }
+  for (int r = 0; r + 1 < s.squares_y; ++r)
+    for (int c = 0; c + 1 < s.squares_x; ++c)
+      corners.push_back({r * (s.squares_x - 1) + c,
+                         Eigen::Vector3d((c + 1) * s.square_size_mm, (r + 1) * s.square_size_mm, 0)});
+  return corners;
+}
+
+std::size_t board_corner_count(const TargetSpec& s) {
+  if (s.kind == TargetKind::aprilgrid) return 4 * static_cast<std::size_t>(s.squares_x) * s.squares_y;
+  if (s.squares_x < 2 || s.squares_y < 2) return 0;
+  return static_cast<std::size_t>(s.squares_x - 1) * (s.squares_y - 1);
+}
+
+bool corner_grid(const TargetSpec& s, int& width, int& height, double& spacing_mm) {
+  if (s.kind == TargetKind::aprilgrid) return false;
+  width = s.squares_x - 1;
+  height = s.squares_y - 1;
+  spacing_mm = s.square_size_mm;
+  return true;
+}
+
+Eigen::Vector2d board_size_mm(const TargetSpec& s) {
+  if (s.kind == TargetKind::aprilgrid)
+    return Eigen::Vector2d(s.squares_x * s.square_size_mm + (s.squares_x - 1) * s.marker_size_mm,
+                           s.squares_y * s.square_size_mm + (s.squares_y - 1) * s.marker_size_mm);
+  return Eigen::Vector2d(s.squares_x * s.square_size_mm, s.squares_y * s.square_size_mm);
+}
+
+std::vector<BoardMarker> board_markers(const TargetSpec& s) {
+  std::vector<BoardMarker> markers;
+  if (s.kind == TargetKind::chessboard) return markers;
+  int id = s.first_id;
+  for (int r = 0; r < s.squares_y; ++r)
+    for (int c = 0; c < s.squares_x; ++c) {
+      BoardMarker m;
+      m.col = c;
+      m.row = r;
+      if (s.kind == TargetKind::aprilgrid) {
+        const double pitch = s.square_size_mm + s.marker_size_mm;
+        m.top_left_mm = Eigen::Vector2d(c * pitch, r * pitch);
+        m.size_mm = s.square_size_mm;
+      } else {
+        if (square_is_black(s, c, r)) continue;
+        const double inset = (s.square_size_mm - s.marker_size_mm) / 2;
+        m.top_left_mm = Eigen::Vector2d(c * s.square_size_mm + inset, r * s.square_size_mm + inset);
+        m.size_mm = s.marker_size_mm;
+      }
+      m.id = id++;
+      markers.push_back(m);
+    }
+  return markers;
+}
+
+std::string describe_target(const TargetSpec& s) {
+  const std::string named = s.name.empty() ? "" : fmt::format("'{}': ", s.name);
+  switch (s.kind) {
+    case TargetKind::chessboard:
+      return fmt::format("{}chessboard, {} x {} squares of {} mm ({} x {} inner corners)", named, s.squares_x,
+                         s.squares_y, s.square_size_mm, s.squares_x - 1, s.squares_y - 1);
+    case TargetKind::charuco:
+      return fmt::format("{}charuco, {} x {} squares of {} mm, markers {} mm, {}, first id {}, {} layout", named,
+                         s.squares_x, s.squares_y, s.square_size_mm, s.marker_size_mm, s.dictionary, s.first_id,
+                         charuco_layout_name(s.charuco_layout));
+    case TargetKind::aprilgrid:
+      return fmt::format("{}aprilgrid, {} x {} {} tags of {} mm, {} mm apart, first id {}", named, s.squares_x,
+                         s.squares_y, s.dictionary, s.square_size_mm, s.marker_size_mm, s.first_id);
+  }
+  return named;
+}
+
+}  // namespace glasspiv

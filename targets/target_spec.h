@@ -1,0 +1,109 @@
+#pragma once
+// A calibration target: what is printed on the board, and where every corner
+// the detectors report lies on it. See docs/targets.md.
+//
+// Board frame (docs/conventions.md): origin at the top-left corner of the
+// pattern as printed (the outer corner of the top-left square, or of the
+// top-left tag's black border), x to the right along the columns, y downwards
+// along the rows, z = 0 on the board; millimetres.
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace glasspiv {
+
+enum class TargetKind { chessboard, charuco, aprilgrid };
+
+// ChArUco boards with an even number of rows were printed differently before
+// OpenCV 4.6.0 (see docs/targets.md). Boards with an odd number of rows look the
+// same both ways.
+//   opencv  OpenCV >= 4.6.0: the top-left square is black.
+//   legacy  OpenCV < 4.6.0 (and OpenCV >= 4.8 with setLegacyPattern(true)) for
+//           an even number of rows: the top-left square is white and holds
+//           marker first_id.
+enum class CharucoLayout { opencv, legacy };
+
+struct TargetSpec {
+  TargetKind kind = TargetKind::charuco;
+  std::string name;  // free text, used as Observations::target_name; may be empty
+  // chessboard, charuco: squares across (columns) and down (rows).
+  // aprilgrid: tags across and down.
+  int squares_x = 0, squares_y = 0;
+  // chessboard, charuco: side of a square. aprilgrid: side of a tag's black
+  // square (its outer black border, 8 of tag36h11's bits), as Kalibr's tagSize.
+  double square_size_mm = 0;
+  // charuco: side of a marker (its black border included).
+  // aprilgrid: the white gap between neighbouring tags in mm (Kalibr's
+  //   tagSpacing is this gap divided by the tag size). Unused (0) for chessboards.
+  double marker_size_mm = 0;
+  // charuco: an OpenCV predefined dictionary ("DICT_5X5_100", "DICT_APRILTAG_36h11", ...).
+  // aprilgrid: "tag36h11". Empty for chessboards.
+  std::string dictionary;
+  // charuco: the marker ids are first_id, first_id + 1, ... row by row from the
+  // top-left. aprilgrid: likewise for the tag ids. 0 for chessboards.
+  int first_id = 0;
+  CharucoLayout charuco_layout = CharucoLayout::opencv;  // charuco only
+};
+
+std::string target_kind_name(TargetKind kind);      // "chessboard", "charuco", "aprilgrid"
+std::string charuco_layout_name(CharucoLayout layout);  // "opencv", "legacy"
+
+// Throws InputError(file, field, problem) naming the first thing that is wrong:
+// too few or too many squares, non-positive or non-finite sizes, a marker not
+// smaller than its square, an unknown dictionary, ids beyond the dictionary, a
+// chessboard whose 180-degree turn cannot be told apart (equal parity of both
+// square counts), fields set that the kind does not use.
+void validate_target(const TargetSpec& spec, const std::string& file = "");
+
+// The OpenCV predefined dictionary id (cv::aruco::PREDEFINED_DICTIONARY_NAME) of
+// `name`, or -1 if there is none of that name. Names as in OpenCV ("DICT_4X4_50").
+int opencv_dictionary_id(const std::string& name);
+// All names opencv_dictionary_id() knows, comma-separated, for error messages.
+std::string opencv_dictionary_names();
+// The number of markers in an OpenCV predefined dictionary (0 if unknown).
+int opencv_dictionary_size(const std::string& name);
+
+struct BoardCorner {
+  int id = 0;
+  Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();  // board frame
+};
+
+// Every corner a detector can report, ordered by id:
+//   chessboard, charuco: the inner corners, (squares_x - 1) per row, row by row
+//     from the top-left, id = row * (squares_x - 1) + col, at
+//     ((col + 1) * square, (row + 1) * square, 0). For charuco these are
+//     OpenCV's charuco corner ids (OpenCV >= 4.6 numbering, in both layouts).
+//   aprilgrid: 4 per tag, id = 4 * tag_index + corner, tag_index = row *
+//     squares_x + col (the tag's id is first_id + tag_index); corner 0, 1, 2, 3
+//     = the top-left, top-right, bottom-right, bottom-left corner of the tag's
+//     black square as printed.
+std::vector<BoardCorner> board_corners(const TargetSpec& spec);
+std::size_t board_corner_count(const TargetSpec& spec);
+
+// The corners as a regular grid (chessboard, charuco): width x height points,
+// spaced `spacing_mm`, the point of id 0 first. An aprilgrid has no such grid:
+// returns false.
+bool corner_grid(const TargetSpec& spec, int& width, int& height, double& spacing_mm);
+
+// The printed pattern's size (width, height) in mm, margins excluded.
+Eigen::Vector2d board_size_mm(const TargetSpec& spec);
+
+// Squares of a chessboard or charuco board: is square (col, row) black?
+bool square_is_black(const TargetSpec& spec, int col, int row);
+
+// A marker (charuco) or tag (aprilgrid) on the board.
+struct BoardMarker {
+  int id = 0;             // dictionary id
+  int col = 0, row = 0;   // its square (charuco) or tag position (aprilgrid)
+  Eigen::Vector2d top_left_mm = Eigen::Vector2d::Zero();  // outer corner of its black border
+  double size_mm = 0;     // side of its black border
+};
+// In order of id (row by row from the top-left). Empty for chessboards.
+std::vector<BoardMarker> board_markers(const TargetSpec& spec);
+
+// One line: "charuco, 11 x 8 squares of 15 mm, markers 11 mm, DICT_5X5_100,
+// first id 0, opencv layout".
+std::string describe_target(const TargetSpec& spec);
+
+}  // namespace glasspiv

@@ -1,0 +1,219 @@
+#include "targets/target_yaml.h"
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <vector>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "targets/text_numbers.h"
+#include "util/atomic_file.h"
+#include "util/input_error.h"
+
+namespace glasspiv {
+namespace {
+
+using targets_detail::format_number;
+using targets_detail::parse_number;
+
+constexpr int kVersion = 1;
+
+// The keys each kind reads, in the order they are written.
+const std::vector<std::string> kCommonKeys = {"glasspiv_target", "name", "kind"};
+const std::vector<std::string> kChessboardKeys = {"squares", "square_size_mm"};
+const std::vector<std::string> kCharucoKeys = {"squares",    "square_size_mm", "marker_size_mm",
+                                               "dictionary", "first_id",       "charuco_layout"};
+const std::vector<std::string> kAprilgridKeys = {"tags", "tag_size_mm", "tag_spacing_mm", "dictionary", "first_id"};
+
+const std::vector<std::string>& kind_keys(TargetKind kind) {
+  switch (kind) {
+    case TargetKind::chessboard: return kChessboardKeys;
+    case TargetKind::charuco: return kCharucoKeys;
+    case TargetKind::aprilgrid: return kAprilgridKeys;
+  }
+  return kCharucoKeys;
+}
+
+bool contains(const std::vector<std::string>& keys, const std::string& key) {
+  for (const auto& k : keys)
+    if (k == key) return true;
+  return false;
+}
+
+std::string join(const std::vector<std::string>& keys) {
+  std::string list;
+  for (const auto& k : keys) list += (list.empty() ? "" : ", ") + k;
+  return list;
+}
+
+class Reader {
+ public:
+  explicit Reader(const std::string& path) : path_(path) {}
+
+  [[noreturn]] void fail(const std::string& field, const YAML::Node& node, const std::string& problem) const {
+    const int line = node.IsDefined() ? node.Mark().line : -1;
+    throw InputError(path_, field, line >= 0 ? fmt::format("line {}: {}", line + 1, problem) : problem);
+  }
+
+  double real(const YAML::Node& node, const std::string& field) const {
+    if (!node.IsScalar()) fail(field, node, "must be a number");
+    const std::string& text = node.Scalar();
+    const std::optional<double> value = parse_number(text);
+    if (!value) fail(field, node, "must be a number, got '" + text + "'");
+    if (!std::isfinite(*value)) fail(field, node, "must be finite, got " + text);
+    return *value;
+  }
+
+  double length(const YAML::Node& node, const std::string& field) const {
+    const double value = real(node, field);
+    if (!(value > 0)) fail(field, node, "must be a positive length in mm, got " + node.Scalar());
+    return value;
+  }
+
+  int whole(const YAML::Node& node, const std::string& field, int min) const {
+    const double value = real(node, field);
+    if (value != std::floor(value) || std::fabs(value) > 1e9)
+      fail(field, node, "must be a whole number, got " + node.Scalar());
+    if (value < min) fail(field, node, fmt::format("must be {} or more, got {}", min, node.Scalar()));
+    return static_cast<int>(value);
+  }
+
+  std::string text(const YAML::Node& node, const std::string& field) const {
+    if (!node.IsScalar()) fail(field, node, "must be a text");
+    return node.Scalar();
+  }
+
+  std::pair<int, int> pair(const YAML::Node& node, const std::string& field, const char* what) const {
+    if (!node.IsSequence() || node.size() != 2)
+      fail(field, node, fmt::format("must be a list of two whole numbers, [{} across, {} down]", what, what));
+    return {whole(node[0], field + "[0]", 1), whole(node[1], field + "[1]", 1)};
+  }
+
+ private:
+  const std::string& path_;
+};
+
+std::string default_name(const std::string& path) {
+  if (path.empty()) return "";
+  return std::filesystem::path(path).stem().string();
+}
+
+}  // namespace
+
+TargetSpec parse_target_yaml(std::string_view contents, const std::string& path) {
+  const Reader r(path);
+  YAML::Node root;
+  try {
+    root = YAML::Load(std::string(contents));
+  } catch (const YAML::Exception& e) {
+    throw InputError(path, "", fmt::format("malformed YAML, line {}: {}", e.mark.line + 1, e.msg));
+  }
+  if (!root.IsMap()) throw InputError(path, "", "expected a YAML mapping of glasspiv target fields");
+
+  std::map<std::string, YAML::Node> fields;
+  std::vector<std::pair<std::string, YAML::Node>> order;
+  for (auto it = root.begin(); it != root.end(); ++it) {
+    const std::string key = it->first.IsScalar() ? it->first.Scalar() : std::string("?");
+    if (fields.count(key)) r.fail(key, it->first, "appears twice");
+    fields[key] = it->second;
+    order.emplace_back(key, it->first);
+  }
+  auto required = [&](const std::string& key) {
+    const auto it = fields.find(key);
+    if (it == fields.end()) throw InputError(path, key, "missing (required)");
+    return it->second;
+  };
+  auto optional = [&](const std::string& key) -> std::optional<YAML::Node> {
+    const auto it = fields.find(key);
+    if (it == fields.end()) return std::nullopt;
+    return it->second;
+  };
+
+  const YAML::Node version = required("glasspiv_target");
+  if (r.real(version, "glasspiv_target") != kVersion)
+    r.fail("glasspiv_target", version,
+           fmt::format("format version {} is not supported (this glasspiv reads version {})", version.Scalar(),
+                       kVersion));
+
+  TargetSpec spec;
+  const YAML::Node kind_node = required("kind");
+  const std::string kind = r.text(kind_node, "kind");
+  if (kind == "chessboard") spec.kind = TargetKind::chessboard;
+  else if (kind == "charuco") spec.kind = TargetKind::charuco;
+  else if (kind == "aprilgrid") spec.kind = TargetKind::aprilgrid;
+  else r.fail("kind", kind_node, "'" + kind + "' is not a target kind (chessboard, charuco, aprilgrid)");
+
+  const std::vector<std::string>& keys = kind_keys(spec.kind);
+  for (const auto& [key, key_node] : order) {
+    if (contains(kCommonKeys, key) || contains(keys, key)) continue;
+    for (const TargetKind other : {TargetKind::chessboard, TargetKind::charuco, TargetKind::aprilgrid})
+      if (contains(kind_keys(other), key))
+        r.fail(key, key_node,
+               fmt::format("{} targets do not use it (they have {}, {})", kind, join(kCommonKeys), join(keys)));
+    r.fail(key, key_node, fmt::format("unknown field ({} targets have {}, {})", kind, join(kCommonKeys), join(keys)));
+  }
+
+  spec.name = optional("name") ? r.text(*optional("name"), "name") : default_name(path);
+
+  if (spec.kind == TargetKind::aprilgrid) {
+    std::tie(spec.squares_x, spec.squares_y) = r.pair(required("tags"), "tags", "tags");
+    spec.square_size_mm = r.length(required("tag_size_mm"), "tag_size_mm");
+    spec.marker_size_mm = r.length(required("tag_spacing_mm"), "tag_spacing_mm");
+    spec.dictionary = optional("dictionary") ? r.text(*optional("dictionary"), "dictionary") : "tag36h11";
+  } else {
+    std::tie(spec.squares_x, spec.squares_y) = r.pair(required("squares"), "squares", "squares");
+    spec.square_size_mm = r.length(required("square_size_mm"), "square_size_mm");
+    if (spec.kind == TargetKind::charuco) {
+      spec.marker_size_mm = r.length(required("marker_size_mm"), "marker_size_mm");
+      spec.dictionary = r.text(required("dictionary"), "dictionary");
+      if (const auto layout = optional("charuco_layout")) {
+        const std::string name = r.text(*layout, "charuco_layout");
+        if (name == "opencv") spec.charuco_layout = CharucoLayout::opencv;
+        else if (name == "legacy") spec.charuco_layout = CharucoLayout::legacy;
+        else r.fail("charuco_layout", *layout, "'" + name + "' is not a layout (opencv or legacy)");
+      }
+    }
+  }
+  if (const auto first = optional("first_id")) spec.first_id = r.whole(*first, "first_id", 0);
+
+  validate_target(spec, path);
+  return spec;
+}
+
+TargetSpec read_target_yaml(const std::string& path) { return parse_target_yaml(read_file(path), path); }
+
+std::string format_target_yaml(const TargetSpec& spec) {
+  validate_target(spec);
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "glasspiv_target" << YAML::Value << kVersion;
+  if (!spec.name.empty()) out << YAML::Key << "name" << YAML::Value << spec.name;
+  out << YAML::Key << "kind" << YAML::Value << target_kind_name(spec.kind);
+  const bool grid = spec.kind == TargetKind::aprilgrid;
+  out << YAML::Key << (grid ? "tags" : "squares") << YAML::Value << YAML::Flow << YAML::BeginSeq << spec.squares_x
+      << spec.squares_y << YAML::EndSeq;
+  out << YAML::Key << (grid ? "tag_size_mm" : "square_size_mm") << YAML::Value
+      << format_number(spec.square_size_mm);
+  if (spec.kind != TargetKind::chessboard) {
+    out << YAML::Key << (grid ? "tag_spacing_mm" : "marker_size_mm") << YAML::Value
+        << format_number(spec.marker_size_mm);
+    out << YAML::Key << "dictionary" << YAML::Value << spec.dictionary;
+    out << YAML::Key << "first_id" << YAML::Value << spec.first_id;
+  }
+  if (spec.kind == TargetKind::charuco)
+    out << YAML::Key << "charuco_layout" << YAML::Value << charuco_layout_name(spec.charuco_layout);
+  out << YAML::EndMap;
+  std::string summary = describe_target(spec);
+  for (char& c : summary)
+    if (c == '\n' || c == '\r') c = ' ';
+  return "# glasspiv calibration target (docs/targets.md): " + summary + "\n" + out.c_str() + "\n";
+}
+
+void write_target_yaml(const std::string& path, const TargetSpec& spec) {
+  write_file_atomically(path, format_target_yaml(spec));
+}
+
+}  // namespace glasspiv

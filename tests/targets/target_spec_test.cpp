@@ -1,0 +1,356 @@
+// Target specs: corner geometry, marker layouts (against OpenCV's own boards),
+// validation, and the YAML file with every rejection.
+#include <string>
+
+#include <gtest/gtest.h>
+#include <opencv2/aruco/charuco.hpp>
+
+#include "targets/target_spec.h"
+#include "targets/target_yaml.h"
+#include "util/input_error.h"
+
+namespace glasspiv {
+namespace {
+
+const std::string kData = std::string(GLASSPIV_SOURCE_DIR) + "/data/targets/";
+
+TargetSpec charuco(int sx, int sy, CharucoLayout layout = CharucoLayout::opencv) {
+  TargetSpec s;
+  s.kind = TargetKind::charuco;
+  s.squares_x = sx;
+  s.squares_y = sy;
+  s.square_size_mm = 15;
+  s.marker_size_mm = 11;
+  s.dictionary = "DICT_5X5_100";
+  s.charuco_layout = layout;
+  return s;
+}
+
+TargetSpec chessboard() {
+  TargetSpec s;
+  s.kind = TargetKind::chessboard;
+  s.squares_x = 9;
+  s.squares_y = 6;
+  s.square_size_mm = 25;
+  return s;
+}
+
+TargetSpec aprilgrid() {
+  TargetSpec s;
+  s.kind = TargetKind::aprilgrid;
+  s.squares_x = 6;
+  s.squares_y = 5;
+  s.square_size_mm = 22;
+  s.marker_size_mm = 6.6;
+  s.dictionary = "tag36h11";
+  return s;
+}
+
+// Expects `f` to throw InputError for `field`; returns its message.
+template <typename F>
+std::string expect_input_error(F f, const std::string& field, const std::string& file = "") {
+  try {
+    f();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), field) << e.what();
+    EXPECT_EQ(e.file(), file) << e.what();
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError for field '" << field << "'";
+  return "";
+}
+
+// ------------------------------------------------------------ geometry
+
+TEST(BoardCorners, ChessboardInnerCornersRowMajor) {
+  const TargetSpec s = chessboard();
+  const auto corners = board_corners(s);
+  ASSERT_EQ(corners.size(), 8u * 5u);
+  ASSERT_EQ(board_corner_count(s), corners.size());
+  for (int row = 0; row < 5; ++row)
+    for (int col = 0; col < 8; ++col) {
+      const BoardCorner& c = corners[static_cast<std::size_t>(row * 8 + col)];
+      EXPECT_EQ(c.id, row * 8 + col);
+      // Exact: small integers times 25.
+      EXPECT_EQ(c.point_mm, Eigen::Vector3d((col + 1) * 25.0, (row + 1) * 25.0, 0));
+    }
+  EXPECT_EQ(board_size_mm(s), Eigen::Vector2d(225, 150));
+  int w = 0, h = 0;
+  double spacing = 0;
+  ASSERT_TRUE(corner_grid(s, w, h, spacing));
+  EXPECT_EQ(w, 8);
+  EXPECT_EQ(h, 5);
+  EXPECT_EQ(spacing, 25);
+  // Top-left square black; the 180-degree turn swaps colours (9 + 6 odd).
+  EXPECT_TRUE(square_is_black(s, 0, 0));
+  EXPECT_FALSE(square_is_black(s, 8, 5));
+}
+
+TEST(BoardCorners, CharucoMatchesOpenCv46) {
+  // OpenCV >= 4.6's CharucoBoard is the reference for the opencv layout: its
+  // chessboard corners are our corners, its markers (ids 0, 1, ... row by row)
+  // our markers. float vs double: compare to 1e-4 mm.
+  for (const auto& [sx, sy] : {std::pair{11, 8}, std::pair{5, 7}, std::pair{4, 4}}) {
+    const TargetSpec s = charuco(sx, sy);
+    const auto board = cv::aruco::CharucoBoard::create(sx, sy, 15.f, 11.f,
+                                                       cv::aruco::getPredefinedDictionary(cv::aruco::DICT_5X5_100));
+    const auto corners = board_corners(s);
+    ASSERT_EQ(corners.size(), board->chessboardCorners.size());
+    for (std::size_t i = 0; i < corners.size(); ++i) {
+      EXPECT_EQ(corners[i].id, static_cast<int>(i));
+      EXPECT_NEAR(corners[i].point_mm.x(), board->chessboardCorners[i].x, 1e-4);
+      EXPECT_NEAR(corners[i].point_mm.y(), board->chessboardCorners[i].y, 1e-4);
+    }
+    const auto markers = board_markers(s);
+    ASSERT_EQ(markers.size(), board->ids.size());
+    for (std::size_t i = 0; i < markers.size(); ++i) {
+      EXPECT_EQ(markers[i].id, board->ids[i]);
+      EXPECT_NEAR(markers[i].top_left_mm.x(), board->objPoints[i][0].x, 1e-4);
+      EXPECT_NEAR(markers[i].top_left_mm.y(), board->objPoints[i][0].y, 1e-4);
+      EXPECT_NEAR(markers[i].size_mm, board->objPoints[i][1].x - board->objPoints[i][0].x, 1e-4);
+    }
+    EXPECT_TRUE(square_is_black(s, 0, 0)) << "OpenCV >= 4.6: the top-left square is black";
+  }
+}
+
+TEST(BoardCorners, LegacyLayoutIsOpenCvBefore46) {
+  // OpenCV <= 4.5.5 built its ChArUco board with y pointing up from the bottom
+  // row: square (x, y_up) is black when y_up % 2 == x % 2, markers numbered from
+  // the top row down, left to right, marker corner 0 at its top-left as printed.
+  // Rebuild that here and compare, in our frame (y down), with the legacy layout.
+  for (const auto& [sx, sy] : {std::pair{11, 8}, std::pair{6, 4}, std::pair{5, 7}}) {
+    const TargetSpec s = charuco(sx, sy, CharucoLayout::legacy);
+    const double sq = 15, m = 11, inset = (sq - m) / 2;
+    std::vector<Eigen::Vector2d> old_top_left;
+    for (int y_up = sy - 1; y_up >= 0; --y_up)
+      for (int x = 0; x < sx; ++x) {
+        if (y_up % 2 == x % 2) continue;
+        const double top_y_up = y_up * sq + inset + m;  // corner 0, y up
+        old_top_left.emplace_back(x * sq + inset, sy * sq - top_y_up);
+      }
+    const auto markers = board_markers(s);
+    ASSERT_EQ(markers.size(), old_top_left.size());
+    for (std::size_t i = 0; i < markers.size(); ++i) {
+      EXPECT_EQ(markers[i].id, static_cast<int>(i));
+      EXPECT_NEAR((markers[i].top_left_mm - old_top_left[i]).norm(), 0, 1e-9) << "marker " << i;
+    }
+    // Black squares: the old rule, with y_up = sy - 1 - row.
+    for (int row = 0; row < sy; ++row)
+      for (int col = 0; col < sx; ++col)
+        EXPECT_EQ(square_is_black(s, col, row), (sy - 1 - row) % 2 == col % 2) << col << "," << row;
+  }
+  // Even rows: the top-left square is white and holds marker first_id; odd rows:
+  // both layouts are the same board.
+  TargetSpec even = charuco(11, 8, CharucoLayout::legacy);
+  even.first_id = 7;
+  EXPECT_FALSE(square_is_black(even, 0, 0));
+  EXPECT_EQ(board_markers(even).front().col, 0);
+  EXPECT_EQ(board_markers(even).front().row, 0);
+  EXPECT_EQ(board_markers(even).front().id, 7);
+  const auto odd_legacy = board_markers(charuco(11, 7, CharucoLayout::legacy));
+  const auto odd_opencv = board_markers(charuco(11, 7, CharucoLayout::opencv));
+  ASSERT_EQ(odd_legacy.size(), odd_opencv.size());
+  for (std::size_t i = 0; i < odd_legacy.size(); ++i) EXPECT_EQ(odd_legacy[i].top_left_mm, odd_opencv[i].top_left_mm);
+}
+
+TEST(BoardCorners, AprilgridFourPerTag) {
+  const TargetSpec s = aprilgrid();
+  const auto corners = board_corners(s);
+  ASSERT_EQ(corners.size(), 4u * 6u * 5u);
+  const double pitch = 22 + 6.6;
+  // Tag (col 2, row 3): index 3 * 6 + 2 = 20; corners TL, TR, BR, BL.
+  const int base = 4 * 20;
+  EXPECT_EQ(corners[base].id, base);
+  EXPECT_NEAR((corners[base + 0].point_mm - Eigen::Vector3d(2 * pitch, 3 * pitch, 0)).norm(), 0, 1e-12);
+  EXPECT_NEAR((corners[base + 1].point_mm - Eigen::Vector3d(2 * pitch + 22, 3 * pitch, 0)).norm(), 0, 1e-12);
+  EXPECT_NEAR((corners[base + 2].point_mm - Eigen::Vector3d(2 * pitch + 22, 3 * pitch + 22, 0)).norm(), 0, 1e-12);
+  EXPECT_NEAR((corners[base + 3].point_mm - Eigen::Vector3d(2 * pitch, 3 * pitch + 22, 0)).norm(), 0, 1e-12);
+  EXPECT_NEAR((board_size_mm(s) - Eigen::Vector2d(6 * 22 + 5 * 6.6, 5 * 22 + 4 * 6.6)).norm(), 0, 1e-12);
+  int w = 0, h = 0;
+  double spacing = 0;
+  EXPECT_FALSE(corner_grid(s, w, h, spacing));
+  const auto markers = board_markers(s);
+  ASSERT_EQ(markers.size(), 30u);
+  EXPECT_EQ(markers[20].id, 20);
+  EXPECT_EQ(markers[20].col, 2);
+  EXPECT_EQ(markers[20].row, 3);
+}
+
+TEST(Validate, RejectsWithTheFieldNamed) {
+  TargetSpec s = chessboard();
+  s.squares_x = 3;
+  expect_input_error([&] { validate_target(s, "b.yaml"); }, "squares", "b.yaml");
+  s = chessboard();
+  s.squares_x = 10;  // 10 + 6 even: the board looks the same turned by 180 degrees
+  EXPECT_NE(expect_input_error([&] { validate_target(s); }, "squares").find("180"), std::string::npos);
+  s = chessboard();
+  s.square_size_mm = -1;
+  expect_input_error([&] { validate_target(s); }, "square_size_mm");
+  s = chessboard();
+  s.square_size_mm = std::nan("");
+  expect_input_error([&] { validate_target(s); }, "square_size_mm");
+  s = chessboard();
+  s.dictionary = "DICT_4X4_50";
+  expect_input_error([&] { validate_target(s); }, "dictionary");
+
+  s = charuco(11, 8);
+  s.marker_size_mm = 15;
+  expect_input_error([&] { validate_target(s); }, "marker_size_mm");
+  s = charuco(11, 8);
+  s.dictionary = "DICT_5X5_99";
+  expect_input_error([&] { validate_target(s); }, "dictionary");
+  s = charuco(11, 8);
+  s.dictionary = "DICT_4X4_50";  // 44 markers fit in 50 ids ...
+  EXPECT_NO_THROW(validate_target(s));
+  s.first_id = 7;                // ... but not from 7
+  expect_input_error([&] { validate_target(s); }, "first_id");
+  s = charuco(2, 8);
+  expect_input_error([&] { validate_target(s); }, "squares");
+
+  s = aprilgrid();
+  s.marker_size_mm = 2;  // under one bit (22 / 8 = 2.75 mm)
+  expect_input_error([&] { validate_target(s); }, "tag_spacing_mm");
+  s = aprilgrid();
+  s.dictionary = "DICT_APRILTAG_36h11";
+  expect_input_error([&] { validate_target(s); }, "dictionary");
+  s = aprilgrid();
+  s.first_id = 570;  // 30 tags from 570 pass tag36h11's 587
+  expect_input_error([&] { validate_target(s); }, "first_id");
+  s = aprilgrid();
+  s.squares_y = 1;
+  expect_input_error([&] { validate_target(s); }, "tags");
+}
+
+TEST(Describe, OneLine) {
+  EXPECT_EQ(describe_target(charuco(11, 8)),
+            "charuco, 11 x 8 squares of 15 mm, markers 11 mm, DICT_5X5_100, first id 0, opencv layout");
+  EXPECT_EQ(describe_target(chessboard()), "chessboard, 9 x 6 squares of 25 mm (8 x 5 inner corners)");
+}
+
+// ------------------------------------------------------------ YAML
+
+TEST(TargetYaml, ShippedSpecsReadAndRoundTrip) {
+  for (const char* file : {"charuco_11x8_15mm.yaml", "chessboard_9x6.yaml", "aprilgrid_6x6.yaml"}) {
+    SCOPED_TRACE(file);
+    const TargetSpec s = read_target_yaml(kData + file);
+    EXPECT_EQ(s.name, std::string(file).substr(0, std::string(file).size() - 5));
+    const TargetSpec back = parse_target_yaml(format_target_yaml(s), "again.yaml");
+    EXPECT_EQ(back.kind, s.kind);
+    EXPECT_EQ(back.name, s.name);
+    EXPECT_EQ(back.squares_x, s.squares_x);
+    EXPECT_EQ(back.squares_y, s.squares_y);
+    EXPECT_EQ(back.square_size_mm, s.square_size_mm);  // exact: written at full precision
+    EXPECT_EQ(back.marker_size_mm, s.marker_size_mm);
+    EXPECT_EQ(back.dictionary, s.dictionary);
+    EXPECT_EQ(back.first_id, s.first_id);
+    EXPECT_EQ(back.charuco_layout, s.charuco_layout);
+  }
+  const TargetSpec c = read_target_yaml(kData + "charuco_11x8_15mm.yaml");
+  EXPECT_EQ(c.kind, TargetKind::charuco);
+  EXPECT_EQ(c.squares_x, 11);
+  EXPECT_EQ(c.squares_y, 8);
+  EXPECT_EQ(c.square_size_mm, 15);
+  EXPECT_EQ(c.marker_size_mm, 11);
+  const TargetSpec a = read_target_yaml(kData + "aprilgrid_6x6.yaml");
+  EXPECT_EQ(a.marker_size_mm, 6.6);
+  EXPECT_EQ(a.square_size_mm, 22);
+}
+
+TEST(TargetYaml, RoundTripIsExactForAwkwardNumbers) {
+  TargetSpec s = charuco(5, 4, CharucoLayout::legacy);
+  s.name = "bench: board #2";  // needs quoting in YAML
+  s.square_size_mm = 0.1 + 0.2;
+  s.marker_size_mm = 1.0 / 7;
+  s.first_id = 3;
+  const TargetSpec back = parse_target_yaml(format_target_yaml(s), "x.yaml");
+  EXPECT_EQ(back.name, s.name);
+  EXPECT_EQ(back.square_size_mm, s.square_size_mm);
+  EXPECT_EQ(back.marker_size_mm, s.marker_size_mm);
+  EXPECT_EQ(back.first_id, 3);
+  EXPECT_EQ(back.charuco_layout, CharucoLayout::legacy);
+}
+
+const char* const kGood =
+    "glasspiv_target: 1\n"
+    "kind: charuco\n"
+    "squares: [11, 8]\n"
+    "square_size_mm: 15\n"
+    "marker_size_mm: 11\n"
+    "dictionary: DICT_5X5_100\n";
+
+TEST(TargetYaml, DefaultsAndOptionalKeys) {
+  const TargetSpec s = parse_target_yaml(kGood, "dir/lab_board.yaml");
+  EXPECT_EQ(s.name, "lab_board");
+  EXPECT_EQ(s.first_id, 0);
+  EXPECT_EQ(s.charuco_layout, CharucoLayout::opencv);
+  const TargetSpec g = parse_target_yaml(
+      "glasspiv_target: 1\nkind: aprilgrid\ntags: [6, 6]\ntag_size_mm: 22\ntag_spacing_mm: 6.6\n", "g.yaml");
+  EXPECT_EQ(g.dictionary, "tag36h11");
+}
+
+struct Rejection {
+  const char* name;
+  std::string yaml;
+  const char* field;
+  const char* says;  // part of the message
+};
+
+TEST(TargetYaml, RejectsEveryKindOfMistake) {
+  const std::string good = kGood;
+  auto replace = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  const Rejection cases[] = {
+      {"unknown key", good + "colour: red\n", "colour", "unknown field"},
+      {"key of another kind", good + "tag_size_mm: 3\n", "tag_size_mm", "charuco targets do not use it"},
+      {"chessboard with markers",
+       "glasspiv_target: 1\nkind: chessboard\nsquares: [9, 6]\nsquare_size_mm: 25\nmarker_size_mm: 3\n",
+       "marker_size_mm", "chessboard targets do not use it"},
+      {"aprilgrid with squares",
+       "glasspiv_target: 1\nkind: aprilgrid\nsquares: [6, 6]\ntag_size_mm: 22\ntag_spacing_mm: 6.6\n", "squares",
+       "aprilgrid targets do not use it"},
+      {"missing key", replace("marker_size_mm: 11\n", ""), "marker_size_mm", "missing"},
+      {"missing version", replace("glasspiv_target: 1\n", ""), "glasspiv_target", "missing"},
+      {"wrong version", replace("glasspiv_target: 1", "glasspiv_target: 2"), "glasspiv_target", "version 2"},
+      {"unknown kind", replace("kind: charuco", "kind: circles"), "kind", "not a target kind"},
+      {"squares not a list", replace("[11, 8]", "11x8"), "squares", "list of two"},
+      {"squares of three", replace("[11, 8]", "[11, 8, 2]"), "squares", "list of two"},
+      {"squares not whole", replace("[11, 8]", "[11.5, 8]"), "squares[0]", "whole number"},
+      {"squares text", replace("[11, 8]", "[eleven, 8]"), "squares[0]", "must be a number"},
+      {"too few squares", replace("[11, 8]", "[11, 2]"), "squares", "at least 3"},
+      {"negative size", replace("square_size_mm: 15", "square_size_mm: -15"), "square_size_mm", "positive"},
+      {"zero marker", replace("marker_size_mm: 11", "marker_size_mm: 0"), "marker_size_mm", "positive"},
+      {"size as text", replace("square_size_mm: 15", "square_size_mm: 15mm"), "square_size_mm", "number"},
+      {"size as list", replace("square_size_mm: 15", "square_size_mm: [15]"), "square_size_mm", "number"},
+      {"size infinite", replace("square_size_mm: 15", "square_size_mm: .inf"), "square_size_mm", "number"},
+      {"marker >= square", replace("marker_size_mm: 11", "marker_size_mm: 15"), "marker_size_mm", "smaller"},
+      {"unknown dictionary", replace("DICT_5X5_100", "DICT_5X5_101"), "dictionary", "not an OpenCV dictionary"},
+      {"dictionary too small", replace("DICT_5X5_100", "DICT_4X4_50") + "first_id: 10\n", "first_id", "only ids"},
+      {"negative first id", good + "first_id: -1\n", "first_id", "0 or more"},
+      {"unknown layout", good + "charuco_layout: new\n", "charuco_layout", "not a layout"},
+      {"repeated key", good + "square_size_mm: 16\n", "square_size_mm", "twice"},
+      {"aprilgrid gap too small",
+       "glasspiv_target: 1\nkind: aprilgrid\ntags: [6, 6]\ntag_size_mm: 22\ntag_spacing_mm: 1\n", "tag_spacing_mm",
+       "one bit"},
+      {"aprilgrid family", "glasspiv_target: 1\nkind: aprilgrid\ntags: [6, 6]\ntag_size_mm: 22\ntag_spacing_mm: 6\n"
+                           "dictionary: tag25h9\n",
+       "dictionary", "tag36h11"},
+      {"chessboard parity", "glasspiv_target: 1\nkind: chessboard\nsquares: [8, 6]\nsquare_size_mm: 25\n", "squares",
+       "180 degrees"},
+  };
+  for (const Rejection& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string message =
+        expect_input_error([&] { parse_target_yaml(c.yaml, "spec.yaml"); }, c.field, "spec.yaml");
+    EXPECT_NE(message.find(c.says), std::string::npos) << message;
+  }
+  // Whole-file problems name no field.
+  expect_input_error([] { parse_target_yaml("kind: [charuco", "spec.yaml"); }, "", "spec.yaml");
+  expect_input_error([] { parse_target_yaml("- 1\n- 2\n", "spec.yaml"); }, "", "spec.yaml");
+  expect_input_error([] { read_target_yaml("no/such/spec.yaml"); }, "", "no/such/spec.yaml");
+}
+
+}  // namespace
+}  // namespace glasspiv
