@@ -82,8 +82,8 @@ double opencv_fit(const Observations& obs, LensModel model, CameraModel* out) {
   cv::Mat k, d;
   std::vector<cv::Mat> rvecs, tvecs;
   const int flags = model == LensModel::OpenCV8 ? cv::CALIB_RATIONAL_MODEL : 0;
-  const double rms = cv::calibrateCamera(object, image, cv::Size(obs.image_width_px, obs.image_height_px), k, d,
-                                         rvecs, tvecs, flags);
+  const double rms =
+      cv::calibrateCamera(object, image, cv::Size(obs.image_width_px, obs.image_height_px), k, d, rvecs, tvecs, flags);
   std::vector<double> distortion(d.begin<double>(), d.end<double>());
   distortion.resize(static_cast<int>(model));
   *out = CameraModel(obs.image_width_px, obs.image_height_px, k.at<double>(0, 0), k.at<double>(1, 1),
@@ -151,8 +151,8 @@ void bench_lens(const Lens& lens, int runs) {
   for (const Row& r : rows) {
     const double diff = projection_difference(*opencv_row->camera, *r.camera, 1000, 32).rms_px;
     std::printf("| %-7s | %-62s | %-11s | %6.1f | %8.2fx | %.9f | %+.1e | %9.1e |\n", lens.name,
-                r.implementation.c_str(), r.threads.c_str(), 1e3 * r.seconds, opencv_row->seconds / r.seconds,
-                r.rms_px, r.rms_px - opencv_row->rms_px, diff);
+                r.implementation.c_str(), r.threads.c_str(), 1e3 * r.seconds, opencv_row->seconds / r.seconds, r.rms_px,
+                r.rms_px - opencv_row->rms_px, diff);
   }
 }
 
@@ -171,13 +171,16 @@ int main(int argc, char** argv) {
               std::min(runs, 3));
   std::printf("machine: %s %s, %u hardware threads; OpenCV %s; compiler %s\n", host.sysname, host.machine,
               std::thread::hardware_concurrency(), CV_VERSION, __VERSION__);
-  std::printf("vs OpenCV: cv::calibrateCamera's single-thread time / this row's time (> 1: faster); RMS: "
-              "sqrt(mean |r|^2) over the corners, px; dRMS: minus OpenCV's RMS; diff: RMS projection difference to "
-              "OpenCV's model over the image, px.\n\n");
-  std::printf("| lens    | implementation                                                 | threads     |     ms | "
-              "vs OpenCV | RMS px      | dRMS px  | diff px   |\n");
-  std::printf("|---------|----------------------------------------------------------------|-------------|-------:|"
-              "----------:|-------------|---------:|----------:|\n");
+  std::printf(
+      "vs OpenCV: cv::calibrateCamera's single-thread time / this row's time (> 1: faster); RMS: "
+      "sqrt(mean |r|^2) over the corners, px; dRMS: minus OpenCV's RMS; diff: RMS projection difference to "
+      "OpenCV's model over the image, px.\n\n");
+  std::printf(
+      "| lens    | implementation                                                 | threads     |     ms | "
+      "vs OpenCV | RMS px      | dRMS px  | diff px   |\n");
+  std::printf(
+      "|---------|----------------------------------------------------------------|-------------|-------:|"
+      "----------:|-------------|---------:|----------:|\n");
   const Lens lenses[] = {
       {"opencv5", CameraModel(2048, 1536, 2400, 2401.5, 1030.25, 760.75, {-0.2, 0.1, 1e-4, -1.2e-4, -0.02})},
       {"opencv8",

@@ -143,7 +143,10 @@ CrossValidation cross_validation(const Observations& observations, const Intrins
   IntrinsicFitOptions half_options = options;
   half_options.compute_uncertainty = true;
   CrossValidation out{fit_intrinsics(every_other_view(observations, 0), half_options),
-                      fit_intrinsics(every_other_view(observations, 1), half_options), {}, {}, 0};
+                      fit_intrinsics(every_other_view(observations, 1), half_options),
+                      {},
+                      {},
+                      0};
   constexpr double kDistanceMm = 1000;  // any: both models sit at the same place
   out.difference = projection_difference(out.even.camera, out.odd.camera, kDistanceMm, approx_step_px);
   out.expected.grid = out.difference.grid;

@@ -22,9 +22,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 std::string format_number(const char* format, double value) {
   char buffer[64];
@@ -111,9 +109,9 @@ bool closed_form_focal(const std::vector<UsedView>& views, double cx, double cy,
 // Directions whose eigenvalue falls below kMinReciprocalCondition * lambda_max
 // count as undetermined: they are left out of the inverse (a pseudo-inverse).
 struct MarginalCovariance {
-  Eigen::MatrixXd covariance;        // empty when S has no positive eigenvalue
-  double reciprocal_condition = 0;   // lambda_min / lambda_max of D S D
-  Eigen::MatrixXd undetermined;      // unit (scaled) eigenvectors of the undetermined directions
+  Eigen::MatrixXd covariance;       // empty when S has no positive eigenvalue
+  double reciprocal_condition = 0;  // lambda_min / lambda_max of D S D
+  Eigen::MatrixXd undetermined;     // unit (scaled) eigenvectors of the undetermined directions
 };
 
 MarginalCovariance marginal_intrinsics_covariance(ceres::Problem& problem, double* intrinsics,
@@ -191,7 +189,7 @@ MarginalCovariance marginal_intrinsics_covariance(ceres::Problem& problem, doubl
 }  // namespace
 
 std::string intrinsic_name(int index) {
-  static const char* names[] = {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3",
+  static const char* names[] = {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2",    "k3",
                                 "k4", "k5", "k6", "s1", "s2", "s3", "s4", "tau_x", "tau_y"};
   return index >= 0 && index < 4 + kMaxDistortionCoefficients ? names[index] : "?";
 }
@@ -220,7 +218,8 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
   for (std::size_t v = 0; v < observations.views.size(); ++v) {
     const auto& corners = observations.views[v].corners;
     if (static_cast<int>(corners.size()) < kMinCornersPerView) {
-      skipped.push_back({static_cast<int>(v), "has " + std::to_string(corners.size()) + " corners; a board pose needs at least " +
+      skipped.push_back({static_cast<int>(v), "has " + std::to_string(corners.size()) +
+                                                  " corners; a board pose needs at least " +
                                                   std::to_string(kMinCornersPerView)});
       continue;
     }
@@ -241,12 +240,14 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
   }
   const auto check_view_count = [&](std::size_t count, const char* when) {
     if (count == 0)
-      throw InputError("", "views", std::string("no usable view") + when + " (" + std::to_string(observations.views.size()) +
-                                        " given); an intrinsic fit needs at least 2 views of a tilted board");
+      throw InputError("", "views",
+                       std::string("no usable view") + when + " (" + std::to_string(observations.views.size()) +
+                           " given); an intrinsic fit needs at least 2 views of a tilted board");
     if (count == 1 && !options.fix_principal_point)
-      throw InputError("", "views", std::string("only 1 usable view") + when +
-                                        ": with a free principal point one view is degenerate; use at least 2 "
-                                        "(better 10 or more) views, or fix the principal point");
+      throw InputError("", "views",
+                       std::string("only 1 usable view") + when +
+                           ": with a free principal point one view is degenerate; use at least 2 "
+                           "(better 10 or more) views, or fix the principal point");
   };
   check_view_count(views.size(), "");
 
@@ -280,8 +281,7 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
   {
     const cv::Matx33d k(intrinsics[0], 0, intrinsics[2], 0, intrinsics[1], intrinsics[3], 0, 0, 1);
     std::vector<double> distortion;
-    if (options.initial_camera && distortion_count > 0)
-      distortion.assign(intrinsics.begin() + 4, intrinsics.end());
+    if (options.initial_camera && distortion_count > 0) distortion.assign(intrinsics.begin() + 4, intrinsics.end());
     std::vector<UsedView> posed;
     for (UsedView& used : views) {
       std::vector<cv::Point3d> board;
@@ -436,7 +436,8 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
     add_summary(summary);
     for (double p : intrinsics)
       if (!std::isfinite(p))
-        throw InputError("", "views", "the fit diverged (non-finite intrinsics); check the corner ids and board points");
+        throw InputError("", "views",
+                         "the fit diverged (non-finite intrinsics); check the corner ids and board points");
     update_residuals();
     if (options.outlier_k == 0 || round + 1 >= kMaxOutlierRounds) break;
 
@@ -479,8 +480,8 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
         }
       problem.RemoveParameterBlock(views[slot].pose.data());
       ordering->Remove(views[slot].pose.data());
-      skipped.push_back({views[slot].view, "fewer than " + std::to_string(kMinCornersPerView) +
-                                               " corners left after outlier rejection"});
+      skipped.push_back({views[slot].view,
+                         "fewer than " + std::to_string(kMinCornersPerView) + " corners left after outlier rejection"});
     }
     if (dropped == 0 && readmitted == 0) break;
     int active = 0;

@@ -9,7 +9,8 @@
 //    cv::solvePnP (SOLVEPNP_IPPE). An initial camera replaces the closed form.
 // 2. Ceres: one residual block per corner (calib/fit/reprojection_cost.h), the
 //    board poses eliminated by the Schur complement (DENSE_SCHUR), fixed
-//    intrinsics held by a ceres::SubsetManifold.
+//    intrinsics held by a ceres::SubsetManifold. Models beyond opencv5 are
+//    staged: k1 k2 p1 p2 k3 first, then all coefficients.
 // 3. Outlier loop: mark corners whose residual norm exceeds outlier_k * sigma
 //    (sigma from the median residual), refit without them, re-test every
 //    corner against the new fit, until the set stops changing.
@@ -57,9 +58,9 @@ struct IntrinsicFitOptions {
 };
 
 struct ObservationResidual {
-  int view = 0;          // index into Observations::views
-  int corner_index = 0;  // index into that view's corners
-  int corner_id = 0;     // CornerObservation::id
+  int view = 0;                                           // index into Observations::views
+  int corner_index = 0;                                   // index into that view's corners
+  int corner_id = 0;                                      // CornerObservation::id
   Eigen::Vector2d residual_px = Eigen::Vector2d::Zero();  // projected - observed
   bool outlier = false;                                   // dropped by the outlier loop
 };
@@ -124,9 +125,9 @@ struct IntrinsicFit {
   // Ceres, summed over the outlier rounds.
   int rounds = 0;
   int iterations = 0;
-  double solver_time_s = 0;  // Ceres Solve() wall time
-  double total_time_s = 0;   // the whole call: initialisation, solves, checks, covariance
-  std::string termination;   // of the last solve: "CONVERGENCE", "NO_CONVERGENCE", ...
+  double solver_time_s = 0;   // Ceres Solve() wall time
+  double total_time_s = 0;    // the whole call: initialisation, solves, checks, covariance
+  std::string termination;    // of the last solve: "CONVERGENCE", "NO_CONVERGENCE", ...
   double initial_rms_px = 0;  // after initialisation, before the first solve
 };
 

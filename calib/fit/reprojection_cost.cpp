@@ -7,12 +7,18 @@ namespace glasspiv {
 ceres::CostFunction* create_reprojection_cost(LensModel lens_model, const Eigen::Vector2d& observed_px,
                                               const Eigen::Vector3d& board_point_mm, double aspect_ratio) {
   switch (lens_model) {
-    case LensModel::Pinhole: return ReprojectionCost<0>::Create(observed_px, board_point_mm, aspect_ratio);
-    case LensModel::OpenCV4: return ReprojectionCost<4>::Create(observed_px, board_point_mm, aspect_ratio);
-    case LensModel::OpenCV5: return ReprojectionCost<5>::Create(observed_px, board_point_mm, aspect_ratio);
-    case LensModel::OpenCV8: return ReprojectionCost<8>::Create(observed_px, board_point_mm, aspect_ratio);
-    case LensModel::OpenCV12: return ReprojectionCost<12>::Create(observed_px, board_point_mm, aspect_ratio);
-    case LensModel::OpenCV14: return ReprojectionCost<14>::Create(observed_px, board_point_mm, aspect_ratio);
+    case LensModel::Pinhole:
+      return ReprojectionCost<0>::Create(observed_px, board_point_mm, aspect_ratio);
+    case LensModel::OpenCV4:
+      return ReprojectionCost<4>::Create(observed_px, board_point_mm, aspect_ratio);
+    case LensModel::OpenCV5:
+      return ReprojectionCost<5>::Create(observed_px, board_point_mm, aspect_ratio);
+    case LensModel::OpenCV8:
+      return ReprojectionCost<8>::Create(observed_px, board_point_mm, aspect_ratio);
+    case LensModel::OpenCV12:
+      return ReprojectionCost<12>::Create(observed_px, board_point_mm, aspect_ratio);
+    case LensModel::OpenCV14:
+      return ReprojectionCost<14>::Create(observed_px, board_point_mm, aspect_ratio);
   }
   return nullptr;
 }

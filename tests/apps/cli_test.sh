@@ -38,7 +38,8 @@ expect_ok() {
 cams="$src/data/cameras"
 
 # --help on every command.
-for cmd in "" "camera" "camera convert" "camera show" "camera compare" "demo"; do
+for cmd in "" "camera" "camera convert" "camera show" "camera compare" "demo" "calib" "calib detect" \
+  "calib intrinsics" "calib report" "target" "target print" "target show"; do
   # shellcheck disable=SC2086
   "$glasspiv" $cmd --help >"$work/out" 2>&1 && grep -q "Usage" "$work/out" && ok || fail "glasspiv $cmd --help"
 done
@@ -76,6 +77,30 @@ expect_error 2 "p.xml" "pixel" -- "$glasspiv" camera convert "$work/a.cameramode
 expect_error 2 "same sensor" -- "$glasspiv" camera compare "$cams/example.yaml" "$cams/wide_opencv8.yaml"
 expect_error 2 "--help" -- "$glasspiv" camera convert
 expect_error 2 "--help" -- "$glasspiv" frobnicate
+
+# A calibration session on real photos (OpenCV's left*.jpg), then a report from
+# the saved observations, and the same fit read back from the camera file.
+left="$src/data/calibration/opencv_left"
+expect_ok "$glasspiv" calib intrinsics "$left" --target "$left/target.yaml" -o "$work/left.cameramodel" \
+  --observations-out "$work/left_obs.yaml" --report "$work/left_report"
+[ -s "$work/left_report/report.html" ] && grep -q "residuals.png" "$work/left_report/report.html" && ok \
+  || fail "calib intrinsics wrote no report"
+for png in residuals coverage uncertainty distortion cross_validation; do
+  [ -s "$work/left_report/$png.png" ] && ok || fail "report lacks $png.png"
+done
+expect_ok "$glasspiv" camera show "$work/left.cameramodel"
+expect_ok "$glasspiv" calib report "$work/left_obs.yaml" -o "$work/left_report2"
+expect_ok "$glasspiv" calib intrinsics "$work/left_obs.yaml" -o "$work/left2.yaml" --no-report
+"$glasspiv" camera compare "$work/left.cameramodel" "$work/left2.yaml" >"$work/out" 2>&1
+# Saved observations are the detected floats exactly; only Ceres' threaded sums
+# may differ in the last bits, far below 1e-6 px.
+awk '/max/ {for (i = 1; i < NF; ++i) if ($i == "max") exit !($(i + 1) < 1e-6)}' "$work/out" && ok \
+  || fail "fit from saved observations differs: $(cat "$work/out")"
+expect_error 2 "aprilgrid" "found in none" -- "$glasspiv" calib intrinsics "$left" --target "$src/data/targets/aprilgrid_6x6.yaml" -o "$work/x.yaml"
+expect_error 2 "--target" -- "$glasspiv" calib intrinsics "$left" -o "$work/x.yaml"
+printf 'not an image' >"$work/fake.png"
+expect_error 2 "fake.png" -- "$glasspiv" calib intrinsics "$work/fake.png" --target "$left/target.yaml" -o "$work/x.yaml"
+[ ! -e "$work/x.yaml" ] && ok || fail "a failed calibration wrote a camera file"
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -40,7 +40,7 @@ TEST(CalibrationDiagnostics, CoverageCountsEveryCorner) {
   long total = 0;
   for (int n : cov.count) total += n;
   EXPECT_EQ(total, static_cast<long>(obs.corner_count()));  // every corner lies on the sensor
-  EXPECT_EQ(cov.grid.cols, 17);  // 2047 / 128 -> 16 steps
+  EXPECT_EQ(cov.grid.cols, 17);                             // 2047 / 128 -> 16 steps
   EXPECT_GT(cov.covered_fraction, 0.9) << "the synthetic views should reach the whole sensor";
 }
 
@@ -98,9 +98,9 @@ TEST(CalibrationDiagnostics, PredictedUncertaintyMatchesSpreadOfRefits) {
     return std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(c).eigenvalues()(1));
   };
   const double empirical_centre = worst_sigma(q_centre), empirical_corner = worst_sigma(q_corner);
-  std::cout << "1-sigma projection uncertainty, predicted / empirical over " << kRealisations
-            << " refits: centre " << predicted_centre << " / " << empirical_centre << " px, top-left corner "
-            << predicted_corner << " / " << empirical_corner << " px\n";
+  std::cout << "1-sigma projection uncertainty, predicted / empirical over " << kRealisations << " refits: centre "
+            << predicted_centre << " / " << empirical_centre << " px, top-left corner " << predicted_corner << " / "
+            << empirical_corner << " px\n";
   // The brief's factor 2. The sample sigma of 20 draws scatters by ~16%
   // (1 / sqrt(2 * 19)); the largest eigenvalue of a 2x2 sample covariance is
   // biased up by a few percent more.
@@ -122,8 +122,7 @@ TEST(CalibrationDiagnostics, UncertaintyGridAndFigures) {
   EXPECT_NEAR(grid.max_px, *std::max_element(figures.corners_px.begin(), figures.corners_px.end()),
               0.3 * grid.max_px);  // the worst sample is at or next to a corner
   // Scale invariance: the intrinsics-only uncertainty does not depend on distance.
-  EXPECT_NEAR(projection_uncertainty_at(fit, {100, 200}, 300), projection_uncertainty_at(fit, {100, 200}, 30000),
-              1e-9);
+  EXPECT_NEAR(projection_uncertainty_at(fit, {100, 200}, 300), projection_uncertainty_at(fit, {100, 200}, 30000), 1e-9);
 
   IntrinsicFitOptions no_uncertainty;
   no_uncertainty.compute_uncertainty = false;

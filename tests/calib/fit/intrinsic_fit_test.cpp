@@ -86,8 +86,8 @@ double opencv_calibrate(const Observations& obs, LensModel model, CameraModel* o
   std::vector<cv::Mat> rvecs, tvecs;
   const int flags = model == LensModel::OpenCV8 ? cv::CALIB_RATIONAL_MODEL : 0;
   const auto start = std::chrono::steady_clock::now();
-  const double rms = cv::calibrateCamera(object, image, cv::Size(obs.image_width_px, obs.image_height_px), k, d,
-                                         rvecs, tvecs, flags);
+  const double rms =
+      cv::calibrateCamera(object, image, cv::Size(obs.image_width_px, obs.image_height_px), k, d, rvecs, tvecs, flags);
   if (seconds) *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::vector<double> distortion(d.begin<double>(), d.end<double>());
   distortion.resize(static_cast<int>(model));
@@ -121,10 +121,10 @@ TEST(IntrinsicFit, RecoversSyntheticTruth) {
   std::cout << "truth: fx " << fit.camera.fx_px() - truth.fx_px() << " fy " << fit.camera.fy_px() - truth.fy_px()
             << " cx " << fit.camera.cx_px() - truth.cx_px() << " cy " << fit.camera.cy_px() - truth.cy_px()
             << " px off (1-sigma fx " << std::sqrt(fit.intrinsics_covariance(0, 0)) << " cx "
-            << std::sqrt(fit.intrinsics_covariance(2, 2)) << "); projection difference RMS " << diff.rms_px
-            << " max " << diff.max_px << " px (intrinsics only: RMS " << plain.rms_px << "); rms "
-            << fit.rms_px << " sigma " << fit.sigma_px << "; " << fit.iterations << " iterations, "
-            << fit.rounds << " rounds, " << fit.outlier_count << " dropped, " << fit.total_time_s << " s\n";
+            << std::sqrt(fit.intrinsics_covariance(2, 2)) << "); projection difference RMS " << diff.rms_px << " max "
+            << diff.max_px << " px (intrinsics only: RMS " << plain.rms_px << "); rms " << fit.rms_px << " sigma "
+            << fit.sigma_px << "; " << fit.iterations << " iterations, " << fit.rounds << " rounds, "
+            << fit.outlier_count << " dropped, " << fit.total_time_s << " s\n";
   // The brief's tolerances. Expected errors for 20 views x ~100 corners at 0.1 px
   // are far smaller (1-sigma of fx ~0.3 px = 0.013%, of cx ~0.2 px).
   EXPECT_NEAR(fit.camera.fx_px(), truth.fx_px(), 1e-3 * truth.fx_px());
@@ -201,9 +201,9 @@ TEST_P(IntrinsicFitVsOpenCV, SameOptimumAtLeastAsLowResidual) {
   const GridValues diff = difference(theirs, fit.camera);
   std::cout << lens_model_name(model) << ": ours rms " << fit.rms_px << ", OpenCV rms " << opencv_rms
             << ", projection difference RMS " << diff.rms_px << " max " << diff.max_px << " px; vs truth RMS "
-            << difference(truth, fit.camera).rms_px << " (OpenCV " << difference(truth, theirs).rms_px
-            << "), aligned " << aligned_difference(truth, fit.camera).rms_px << " (OpenCV "
-            << aligned_difference(truth, theirs).rms_px << ")\n";
+            << difference(truth, fit.camera).rms_px << " (OpenCV " << difference(truth, theirs).rms_px << "), aligned "
+            << aligned_difference(truth, fit.camera).rms_px << " (OpenCV " << aligned_difference(truth, theirs).rms_px
+            << ")\n";
   // Both minimise the same sum of squares: the optima should coincide to well
   // below the noise-induced uncertainty (~0.02-0.05 px); OpenCV stops after 30
   // iterations at its default criteria, so it can only be above ours.
@@ -223,8 +223,8 @@ TEST(IntrinsicFit, AgreesWithMrcal) {
   const IntrinsicFit fit = fit_intrinsics(obs, options);
   std::string error;
   // A user's rough guess of the focal length, as mrcal-calibrate-cameras' --focal.
-  const auto theirs = testing::run_mrcal_fit(obs, board, LensModel::OpenCV5, 1.1 * truth.fx_px(),
-                                             temp_dir("mrcal"), GLASSPIV_SOURCE_DIR, &error);
+  const auto theirs = testing::run_mrcal_fit(obs, board, LensModel::OpenCV5, 1.1 * truth.fx_px(), temp_dir("mrcal"),
+                                             GLASSPIV_SOURCE_DIR, &error);
   if (!theirs) {
     if (testing::python_with_mrcal().empty()) GTEST_SKIP() << error;
     FAIL() << error;
@@ -402,7 +402,7 @@ TEST(IntrinsicFit, OptionsHoldTheirParameters) {
   EXPECT_EQ(held.camera.cx_px(), 1030);
   EXPECT_EQ(held.camera.cy_px(), 760);
   EXPECT_EQ(held.free_intrinsics, (std::vector<int>{0, 4, 5, 6, 7, 8}));  // fx k1 k2 p1 p2 k3
-  EXPECT_LT(difference(truth, held.camera).rms_px, 0.1);  // no principal-point error to align away
+  EXPECT_LT(difference(truth, held.camera).rms_px, 0.1);                  // no principal-point error to align away
   expect_finite(held);
 
   guided.initial_camera = CameraModel(1024, 768, 1200, 1200, 511.5, 383.5);

@@ -39,14 +39,14 @@ std::optional<MrcalFit> run_mrcal_fit(const Observations& observations, const Sy
       const auto& corners = observations.views[v].corners;
       for (std::size_t c = 0; c < corners.size(); ++c)
         out << (c ? ", [" : "[") << std::lround(corners[c].board_point_mm.x() / board.spacing_mm) << ", "
-            << std::lround(corners[c].board_point_mm.y() / board.spacing_mm) << ", " << corners[c].pixel_px.x()
-            << ", " << corners[c].pixel_px.y() << "]";
+            << std::lround(corners[c].board_point_mm.y() / board.spacing_mm) << ", " << corners[c].pixel_px.x() << ", "
+            << corners[c].pixel_px.y() << "]";
       out << "]";
     }
     out << "]}\n";
   }
-  const std::string command = "'" + python + "' '" + source_dir + "/tests/calib/fit/mrcal_fit.py' '" + in_path +
-                              "' '" + out_path + "'";
+  const std::string command =
+      "'" + python + "' '" + source_dir + "/tests/calib/fit/mrcal_fit.py' '" + in_path + "' '" + out_path + "'";
   if (std::system(command.c_str()) != 0) {
     *error = "failed: " + command;
     return std::nullopt;
