@@ -125,8 +125,13 @@ TEST(IntrinsicFit, RecoversSyntheticTruth) {
             << diff.max_px << " px (intrinsics only: RMS " << plain.rms_px << "); rms " << fit.rms_px << " sigma "
             << fit.sigma_px << "; " << fit.iterations << " iterations, " << fit.rounds << " rounds, "
             << fit.outlier_count << " dropped, " << fit.total_time_s << " s\n";
-  // The brief's tolerances. Expected errors for 20 views x ~100 corners at 0.1 px
-  // are far smaller (1-sigma of fx ~0.3 px = 0.013%, of cx ~0.2 px).
+  // The brief's tolerances. The fit's own 1-sigma: fx ~0.2 px (0.008%, far inside
+  // 0.1%), cx, cy ~0.23 px: the 0.5 px principal-point bound is only ~2 sigma per
+  // axis. Over seeds 100-129 the principal point lies within 0.5 px (distance)
+  // in 24 of 30, the aligned projection difference is < 0.1 px in 26 (worst
+  // 0.13 px), fx within 0.1% in 30 (worst 0.02%); cv::calibrateCamera's fit of
+  // the same data is the same to 0.002 px. Seed 1 meets all; the 4-sigma checks
+  // below are the ones that hold for any seed.
   EXPECT_NEAR(fit.camera.fx_px(), truth.fx_px(), 1e-3 * truth.fx_px());
   EXPECT_NEAR(fit.camera.fy_px(), truth.fy_px(), 1e-3 * truth.fy_px());
   EXPECT_NEAR(fit.camera.cx_px(), truth.cx_px(), 0.5);
@@ -138,6 +143,8 @@ TEST(IntrinsicFit, RecoversSyntheticTruth) {
   EXPECT_NEAR(fit.sigma_px, kNoisePx, 0.1 * kNoisePx);
   // The covariance's 1-sigma should explain the actual error: within 4 sigma.
   EXPECT_LT(std::abs(fit.camera.fx_px() - truth.fx_px()), 4 * std::sqrt(fit.intrinsics_covariance(0, 0)));
+  EXPECT_LT(std::abs(fit.camera.cx_px() - truth.cx_px()), 4 * std::sqrt(fit.intrinsics_covariance(2, 2)));
+  EXPECT_LT(std::abs(fit.camera.cy_px() - truth.cy_px()), 4 * std::sqrt(fit.intrinsics_covariance(3, 3)));
   EXPECT_EQ(fit.camera_from_board.size(), obs.views.size());
   EXPECT_TRUE(fit.skipped_views.empty());
 }
