@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -11,15 +12,14 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
-#include "targets/text_numbers.h"
 #include "util/atomic_file.h"
 #include "util/input_error.h"
+#include "util/text_number.h"
+#include "util/yaml_fields.h"
 
 namespace glasspiv {
 namespace {
 
-using targets_detail::format_number;
-using targets_detail::parse_number;
 
 constexpr int kVersion = 1;
 const char* const kTopKeys[] = {"glasspiv_observations", "image_size_px", "target", "views"};
@@ -58,28 +58,11 @@ void check(const Observations& o, const std::string& path) {
 
 // ---------------------------------------------------------------- YAML
 
-class YamlReader {
+class YamlReader : public YamlFields {
  public:
-  explicit YamlReader(const std::string& path) : path_(path) {}
-  [[noreturn]] void fail(const std::string& field, const YAML::Node& node, const std::string& problem) const {
-    const int line = node.IsDefined() ? node.Mark().line : -1;
-    throw InputError(path_, field, line >= 0 ? fmt::format("line {}: {}", line + 1, problem) : problem);
-  }
-  double real(const YAML::Node& node, const std::string& field) const {
-    if (!node.IsScalar()) fail(field, node, "must be a number");
-    const std::optional<double> v = parse_number(node.Scalar());
-    if (!v) fail(field, node, "must be a number, got '" + node.Scalar() + "'");
-    if (!std::isfinite(*v)) fail(field, node, "must be finite, got " + node.Scalar());
-    return *v;
-  }
+  using YamlFields::YamlFields;
   int whole(const YAML::Node& node, const std::string& field) const {
-    const double v = real(node, field);
-    if (v != std::floor(v) || std::fabs(v) > 2e9) fail(field, node, "must be a whole number, got " + node.Scalar());
-    return static_cast<int>(v);
-  }
-  std::string text(const YAML::Node& node, const std::string& field) const {
-    if (!node.IsScalar()) fail(field, node, "must be a text");
-    return node.Scalar();
+    return YamlFields::whole(node, field, std::numeric_limits<int>::min());
   }
   std::map<std::string, YAML::Node> map(const YAML::Node& node, const std::string& field, const char* const* begin,
                                         const char* const* end) const {
@@ -100,9 +83,6 @@ class YamlReader {
       if (!fields.count(*k)) fail(field.empty() ? *k : field + "." + *k, node, "missing (required)");
     return fields;
   }
-
- private:
-  const std::string& path_;
 };
 
 Observations parse_yaml(std::string_view contents, const std::string& path) {

@@ -9,15 +9,14 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "targets/text_numbers.h"
 #include "util/atomic_file.h"
 #include "util/input_error.h"
+#include "util/text_number.h"
+#include "util/yaml_fields.h"
 
 namespace glasspiv {
 namespace {
 
-using targets_detail::format_number;
-using targets_detail::parse_number;
 
 constexpr int kVersion = 1;
 
@@ -49,23 +48,9 @@ std::string join(const std::vector<std::string>& keys) {
   return list;
 }
 
-class Reader {
+class Reader : public YamlFields {
  public:
-  explicit Reader(const std::string& path) : path_(path) {}
-
-  [[noreturn]] void fail(const std::string& field, const YAML::Node& node, const std::string& problem) const {
-    const int line = node.IsDefined() ? node.Mark().line : -1;
-    throw InputError(path_, field, line >= 0 ? fmt::format("line {}: {}", line + 1, problem) : problem);
-  }
-
-  double real(const YAML::Node& node, const std::string& field) const {
-    if (!node.IsScalar()) fail(field, node, "must be a number");
-    const std::string& text = node.Scalar();
-    const std::optional<double> value = parse_number(text);
-    if (!value) fail(field, node, "must be a number, got '" + text + "'");
-    if (!std::isfinite(*value)) fail(field, node, "must be finite, got " + text);
-    return *value;
-  }
+  using YamlFields::YamlFields;
 
   double length(const YAML::Node& node, const std::string& field) const {
     const double value = real(node, field);
@@ -73,27 +58,11 @@ class Reader {
     return value;
   }
 
-  int whole(const YAML::Node& node, const std::string& field, int min) const {
-    const double value = real(node, field);
-    if (value != std::floor(value) || std::fabs(value) > 1e9)
-      fail(field, node, "must be a whole number, got " + node.Scalar());
-    if (value < min) fail(field, node, fmt::format("must be {} or more, got {}", min, node.Scalar()));
-    return static_cast<int>(value);
-  }
-
-  std::string text(const YAML::Node& node, const std::string& field) const {
-    if (!node.IsScalar()) fail(field, node, "must be a text");
-    return node.Scalar();
-  }
-
   std::pair<int, int> pair(const YAML::Node& node, const std::string& field, const char* what) const {
     if (!node.IsSequence() || node.size() != 2)
       fail(field, node, fmt::format("must be a list of two whole numbers, [{} across, {} down]", what, what));
     return {whole(node[0], field + "[0]", 1), whole(node[1], field + "[1]", 1)};
   }
-
- private:
-  const std::string& path_;
 };
 
 std::string default_name(const std::string& path) {

@@ -19,21 +19,6 @@ namespace glasspiv {
 
 namespace camera_file_detail {
 
-std::string format_real(double value) {
-  std::string text = fmt::format("{}", value);
-  if (std::isfinite(value) && text.find_first_of(".eE") == std::string::npos) text += ".0";
-  return text;
-}
-
-std::optional<double> parse_real(std::string_view text) {
-  const bool plus = !text.empty() && text.front() == '+';
-  if (plus) text.remove_prefix(1);
-  if (text.empty() || (plus && text.front() == '-')) return std::nullopt;
-  double value = 0;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
-  return value;
-}
 
 void rethrow_naming_file(const std::string& path) {
   try {

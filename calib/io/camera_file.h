@@ -44,13 +44,6 @@ void write_cameras(const std::string& path, const std::vector<Camera>& cameras,
 
 // Helpers the format readers and writers (calib/io/*.cpp) share.
 namespace camera_file_detail {
-// The shortest decimal text that reads back as exactly `value`, always with a
-// '.' or an exponent so every format sees a real number ("600.0", "1e-05").
-std::string format_real(double value);
-// Parses all of `text` as a double, correctly rounded and independent of the
-// locale; nullopt unless the whole text is one number (a leading '+' is allowed;
-// "nan" and "inf" parse, so callers must check finiteness).
-std::optional<double> parse_real(std::string_view text);
 // To be called inside a catch block: rethrows the current exception, except an
 // InputError without a file (the CameraModel constructor's), which is rethrown
 // naming `path`.

@@ -12,13 +12,12 @@
 
 #include "calib/io/camera_file.h"
 #include "util/input_error.h"
+#include "util/text_number.h"
 
 namespace glasspiv {
 namespace {
 
-using camera_file_detail::format_real;
 using camera_file_detail::line_of_offset;
-using camera_file_detail::parse_real;
 
 constexpr const char* kMapperType = "PinholeOpenCV";
 
@@ -96,7 +95,7 @@ class MapperReader {
 
   double real(const pugi::xml_node& node, const char* attribute) const {
     const std::string t = text(node, attribute);
-    const std::optional<double> v = parse_real(t);
+    const std::optional<double> v = parse_number(t);
     check(node, attribute, t, v.has_value(), v && std::isfinite(*v));
     return *v;
   }
@@ -134,7 +133,7 @@ void read_distortion(const MapperReader& r, const pugi::xml_node& node, const ch
   for (const pugi::xml_attribute& attribute : node.attributes()) {
     const std::string name = attribute.name();
     if (name == first || name == second) continue;
-    const std::optional<double> v = parse_real(attribute.value());
+    const std::optional<double> v = parse_number(attribute.value());
     if (!v || *v != 0)
       r.fail(node, MapperReader::field(node, attribute.name()),
              std::string("= ") + attribute.value() +

@@ -10,12 +10,12 @@
 
 #include "calib/io/camera_file.h"
 #include "util/input_error.h"
+#include "util/text_number.h"
+#include "util/yaml_fields.h"
 
 namespace glasspiv {
 namespace {
 
-using camera_file_detail::format_real;
-using camera_file_detail::parse_real;
 
 constexpr int kVersion = 1;
 const char* const kFields[] = {"glasspiv_camera",    "name",           "image_size_px",   "lens_model",
@@ -30,37 +30,9 @@ std::string known_fields() {
   return list;
 }
 
-class Reader {
+class Reader : public YamlFields {
  public:
-  explicit Reader(const std::string& path) : path_(path) {}
-
-  [[noreturn]] void fail(const std::string& field, const YAML::Node& node, const std::string& problem) const {
-    const int line = node.IsDefined() ? node.Mark().line : -1;
-    throw InputError(path_, field, line >= 0 ? fmt::format("line {}: {}", line + 1, problem) : problem);
-  }
-
-  double real(const YAML::Node& node, const std::string& field) const {
-    if (!node.IsScalar()) fail(field, node, "must be a number");
-    const std::string& text = node.Scalar();
-    std::optional<double> value = parse_real(text);
-    // YAML spells the non-finite values .nan, .inf, -.inf.
-    std::string lower = text.substr(!text.empty() && (text[0] == '+' || text[0] == '-') ? 1 : 0);
-    for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    const bool yaml_special = lower == ".nan" || lower == ".inf";
-    if (yaml_special || (value && !std::isfinite(*value))) fail(field, node, "must be finite, got " + text);
-    if (!value) fail(field, node, "must be a number, got '" + text + "'");
-    return *value;
-  }
-
-  std::vector<double> reals(const YAML::Node& node, const std::string& field, std::optional<std::size_t> size) const {
-    if (!node.IsSequence())
-      fail(field, node, size ? fmt::format("must be a list of {} numbers", *size) : "must be a list of numbers");
-    if (size && node.size() != *size)
-      fail(field, node, fmt::format("must have {} values, has {}", *size, node.size()));
-    std::vector<double> values;
-    for (std::size_t i = 0; i < node.size(); ++i) values.push_back(real(node[i], fmt::format("{}[{}]", field, i)));
-    return values;
-  }
+  using YamlFields::YamlFields;
 
   int positive_int(const YAML::Node& node, const std::string& field) const {
     const double value = real(node, field);
@@ -68,14 +40,6 @@ class Reader {
       fail(field, node, "must be a positive whole number of pixels, got " + node.Scalar());
     return static_cast<int>(value);
   }
-
-  std::string text(const YAML::Node& node, const std::string& field) const {
-    if (!node.IsScalar()) fail(field, node, "must be a text");
-    return node.Scalar();
-  }
-
- private:
-  const std::string& path_;
 };
 
 std::vector<Camera> parse(std::string_view contents, const std::string& path) {

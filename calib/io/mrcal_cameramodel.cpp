@@ -9,11 +9,11 @@
 
 #include "calib/io/camera_file.h"
 #include "util/input_error.h"
+#include "util/text_number.h"
 
 namespace glasspiv {
 namespace {
 
-using camera_file_detail::format_real;
 using camera_file_detail::line_of_offset;
 
 // A value of the Python-literal subset mrcal writes.
@@ -225,7 +225,7 @@ class Parser {
     std::string_view word = digits;
     const bool negative = !word.empty() && word.front() == '-';
     if (negative || (!word.empty() && word.front() == '+')) word.remove_prefix(1);
-    const std::optional<double> parsed = camera_file_detail::parse_real(word);
+    const std::optional<double> parsed = parse_number(word);
     // from_chars also takes "nan" and "inf", which Python spells as names, not numbers;
     // they arrive here only with a sign ("-inf") and are kept to be rejected as non-finite.
     if (!parsed || (!word.empty() && (word.front() == '+' || word.front() == '-')))

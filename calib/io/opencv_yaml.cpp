@@ -8,11 +8,11 @@
 
 #include "calib/io/camera_file.h"
 #include "util/input_error.h"
+#include "util/text_number.h"
 
 namespace glasspiv {
 namespace {
 
-using camera_file_detail::format_real;
 
 // OpenCV's parser reports "(LINE): message" in cv::Exception::func; other
 // failures carry their text in cv::Exception::err.

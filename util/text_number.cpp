@@ -1,12 +1,19 @@
-#include "targets/text_numbers.h"
+#include "util/text_number.h"
 
 #include <charconv>
+#include <cmath>
 
 #include <fmt/format.h>
 
-namespace glasspiv::targets_detail {
+namespace glasspiv {
 
 std::string format_number(double value) { return fmt::format("{}", value); }
+
+std::string format_real(double value) {
+  std::string text = format_number(value);
+  if (std::isfinite(value) && text.find_first_of(".eE") == std::string::npos) text += ".0";
+  return text;
+}
 
 std::optional<double> parse_number(std::string_view text) {
   const bool plus = !text.empty() && text.front() == '+';
@@ -18,4 +25,4 @@ std::optional<double> parse_number(std::string_view text) {
   return value;
 }
 
-}  // namespace glasspiv::targets_detail
+}  // namespace glasspiv
