@@ -135,17 +135,15 @@ void CameraModel::find_fold_radii() {
       break;
     }
   }
-}
-
-double CameraModel::fold_radius() const {
-  const double fold = *std::min_element(fold_radius_by_direction_.begin(), fold_radius_by_direction_.end());
   // Directions between the samples may fold slightly earlier: keep a margin.
-  return fold < kFoldSearchRadius ? 0.98 * fold : fold;
+  const double fold = *std::min_element(fold_radius_by_direction_.begin(), fold_radius_by_direction_.end());
+  fold_radius_ = fold < kFoldSearchRadius ? 0.98 * fold : fold;
 }
 
 bool CameraModel::inside_invertible_region(const Eigen::Vector2d& n) const {
   if (lens_model_ == LensModel::Pinhole) return true;
   const double r = n.norm();
+  if (r < fold_radius_) return true;  // inside the fold in every direction: no look-up needed
   if (r >= kFoldSearchRadius) return false;
   double sector = std::atan2(n.y(), n.x()) / (2.0 * M_PI) * kFoldDirections;
   if (sector < 0) sector += kFoldDirections;

@@ -77,7 +77,7 @@ class CameraModel {
   // Normalised radius below which the distortion is invertible in every
   // direction (the Jacobian stays positive); kFoldSearchRadius when no fold was
   // found within that radius (84 deg off axis, far past any pinhole lens).
-  double fold_radius() const;
+  double fold_radius() const { return fold_radius_; }
   static constexpr double kFoldSearchRadius = 10.0;
 
   // Horizontal, vertical and diagonal field of view in degrees, measured through
@@ -102,6 +102,7 @@ class CameraModel {
   std::array<double, 9> tilt_{};
   bool tilted_ = false;
   std::array<double, kFoldDirections> fold_radius_by_direction_{};
+  double fold_radius_ = kFoldSearchRadius;  // min over the directions, with a margin
 };
 
 }  // namespace glasspiv

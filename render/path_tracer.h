@@ -1,0 +1,126 @@
+#pragma once
+// Exact (analytic-geometry) path tracer with deterministic Fresnel splitting:
+// one camera ray in, the tree of its reflected and refracted branches out, with
+// every crossing of the light sheet made in the fluid. The model, the rules and
+// what is tested are in docs/tracer.md. Double precision, mm. No I/O.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "render/shapes.h"
+
+namespace glasspiv {
+
+// Optical behaviour of a solid. Glass: a dielectric of refractive index n
+// (absolute, like the fluid's) with Beer-Lambert attenuation alpha (natural
+// log, 1/mm). Opaque: ends the branch (absorbs; shading is for later).
+struct TraceMaterial {
+  enum class Kind { glass, opaque };
+  Kind kind = Kind::glass;
+  double refractive_index = 1.5;
+  double absorption_per_mm = 0;
+
+  static TraceMaterial glass(double n, double absorption_per_mm = 0) { return {Kind::glass, n, absorption_per_mm}; }
+  static TraceMaterial opaque() { return {Kind::opaque, 1, 0}; }
+};
+
+struct TraceSolid {
+  Shape shape;
+  TraceMaterial material;
+};
+
+// The light sheet: the plane through origin_mm spanned by the orthonormal axes
+// s_axis, t_axis. Sheet coordinates of a point p: s = (p - origin) . s_axis,
+// t = (p - origin) . t_axis; crossings count where |s| <= extent_s_mm / 2 and
+// |t| <= extent_t_mm / 2 (the extent is centred on the origin).
+struct SheetPlane {
+  Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d s_axis = Eigen::Vector3d::UnitX();
+  Eigen::Vector3d t_axis = Eigen::Vector3d::UnitY();
+  double extent_s_mm = 100;
+  double extent_t_mm = 100;
+
+  Eigen::Vector3d normal() const { return s_axis.cross(t_axis); }
+};
+
+// Solids must not overlap (they may touch, as the spheres of a packing do).
+struct TraceScene {
+  std::vector<TraceSolid> solids;
+  double fluid_index = 1.0;  // absolute index of the medium around the solids
+  SheetPlane sheet;
+};
+
+struct TraceOptions {
+  bool reflections = true;  // false: reflected branches are not spawned (their weight is "skipped")
+  double min_weight = 1e-6;  // a branch whose weight falls below this is cut (weight recorded)
+  int max_depth = 32;        // most interface events on one path; a deeper branch is cut
+};
+
+// Interface events on the path before the crossing: none, refractions only,
+// at least one reflection (total internal reflection included).
+enum class CrossingTag { direct, refracted_only, with_reflections };
+
+struct SheetCrossing {
+  double s_mm = 0, t_mm = 0;
+  double weight = 0;
+  int depth = 0;  // interface events on the path so far
+  CrossingTag tag = CrossingTag::direct;
+  Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+};
+
+// A branch that left the scene (hit nothing): the background in `direction`.
+struct BackgroundRay {
+  Eigen::Vector3d from_mm = Eigen::Vector3d::Zero();  // last surface point (or the ray's origin)
+  Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+  double weight = 0;
+  int depth = 0;
+  CrossingTag tag = CrossingTag::direct;
+};
+
+struct OpaqueHit {
+  int solid_index = -1;
+  Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  double weight = 0;
+  int depth = 0;
+  CrossingTag tag = CrossingTag::direct;
+};
+
+struct TraceCounts {
+  long branches_traced = 0;  // segments followed (the initial ray is one)
+  long cut_by_weight = 0;    // branches with 0 < weight < min_weight not followed
+  long cut_by_depth = 0;     // branches beyond max_depth not followed
+  long tir_events = 0;       // total internal reflections
+  long reflections_skipped = 0;  // reflected branches not spawned (options.reflections = false)
+  long medium_corrections = 0;   // a spawned branch found itself in another medium (contacts, edges)
+};
+
+// Where the unit weight of the camera ray went. Every bit of it ends in exactly
+// one of these bins, so terminal_weight_sum() == 1 up to round-off.
+struct TraceResult {
+  std::vector<SheetCrossing> crossings;
+  std::vector<BackgroundRay> background;
+  std::vector<OpaqueHit> opaque_hits;
+  TraceCounts counts;
+  double background_weight = 0;
+  double opaque_weight = 0;
+  double absorbed_weight = 0;         // Beer-Lambert loss inside glass
+  double cut_by_weight_weight = 0;
+  double cut_by_depth_weight = 0;
+  double skipped_reflection_weight = 0;
+
+  double terminal_weight_sum() const {
+    return background_weight + opaque_weight + absorbed_weight + cut_by_weight_weight + cut_by_depth_weight +
+           skipped_reflection_weight;
+  }
+};
+
+// Traces one ray (direction need not be unit; it is normalised) through the
+// scene. Throws std::invalid_argument for a zero or non-finite direction or
+// origin. Deterministic: the same input gives the same output, branch order
+// included (depth first, refracted branch before reflected).
+TraceResult trace_ray(const TraceScene& scene, const Eigen::Vector3d& origin_mm, const Eigen::Vector3d& direction,
+                      const TraceOptions& options = {});
+
+}  // namespace glasspiv
