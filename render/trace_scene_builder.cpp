@@ -1,0 +1,81 @@
+#include "render/trace_scene_builder.h"
+
+#include <stdexcept>
+
+namespace glasspiv {
+
+namespace {
+
+TraceMaterial trace_material(const Scene& scene, const std::string& name, const std::string& field) {
+  const Material m = scene.material(name, field);
+  if (m.kind == MaterialKind::opaque) return TraceMaterial::opaque();
+  return TraceMaterial::glass(m.refractive_index(scene.wavelength_nm), m.absorption_per_mm.value_or(0.0));
+}
+
+Box to_trace_box(const BoxSolid& b) {
+  Box box;
+  box.centre_mm = b.centre_mm;
+  box.world_from_box = b.world_from_box;
+  box.half_extent_mm = 0.5 * b.size_mm;
+  return box;
+}
+
+}  // namespace
+
+TraceScene build_trace_scene(const Scene& scene, TraceSceneBuildInfo* info) {
+  if (!scene.sheet) throw std::invalid_argument("build_trace_scene: the scene has no sheet");
+  TraceSceneBuildInfo counts;
+  TraceScene out;
+  out.fluid_index = scene.material(scene.fluid, "fluid").refractive_index(scene.wavelength_nm);
+
+  for (const SphereSolid& s : scene.all_spheres()) {
+    out.solids.push_back({Sphere{s.centre_mm, 0.5 * s.diameter_mm}, trace_material(scene, s.material, s.field)});
+    ++counts.spheres;
+  }
+  for (const BoxSolid& b : scene.boxes) {
+    out.solids.push_back({to_trace_box(b), trace_material(scene, b.material, b.field)});
+    ++counts.boxes;
+  }
+  for (const SlabSolid& s : scene.slabs) {
+    out.solids.push_back({to_trace_box(s.to_box()), trace_material(scene, s.material, s.field)});
+    ++counts.slabs;
+  }
+  for (const CylinderSolid& c : scene.cylinders) {
+    Cylinder cyl;
+    cyl.axis = c.axis.normalized();
+    cyl.centre_mm = c.base_centre_mm + 0.5 * c.length_mm * cyl.axis;
+    cyl.radius_mm = c.radius_mm;
+    cyl.half_length_mm = 0.5 * c.length_mm;
+    out.solids.push_back({cyl, trace_material(scene, c.material, c.field)});
+    ++counts.cylinders;
+  }
+  counts.skipped_rectangles = static_cast<int>(scene.rectangles.size());
+
+  const Sheet& sh = *scene.sheet;
+  out.sheet.origin_mm = sh.origin_mm;
+  out.sheet.s_axis = sh.s_axis;
+  out.sheet.t_axis = sh.t_axis;
+  out.sheet.extent_s_mm = sh.extent_mm[0];
+  out.sheet.extent_t_mm = sh.extent_mm[1];
+  if (info) *info = counts;
+  return out;
+}
+
+std::optional<WorldRay> pixel_world_ray(const CameraModel& model, const RigidTransform& camera_from_world,
+                                        const Eigen::Vector2d& pixel) {
+  const UnprojectResult u = model.unproject(pixel);
+  if (!u.ok()) return std::nullopt;
+  WorldRay r;
+  const Eigen::Matrix3d world_from_camera = camera_from_world.rotation.transpose();
+  r.origin_mm = -(world_from_camera * camera_from_world.translation_mm);
+  r.direction = (world_from_camera * u.ray_camera).normalized();
+  return r;
+}
+
+std::optional<WorldRay> pixel_world_ray(const Scene& scene, int camera_index, const Eigen::Vector2d& pixel) {
+  const SceneCamera& cam = scene.cameras.at(static_cast<std::size_t>(camera_index));
+  if (!cam.camera.camera_from_world) throw std::invalid_argument("pixel_world_ray: camera '" + cam.name + "' has no pose");
+  return pixel_world_ray(cam.camera.model, *cam.camera.camera_from_world, pixel);
+}
+
+}  // namespace glasspiv

@@ -1,0 +1,52 @@
+#pragma once
+// Scene (the file-level description, render/scene.h) -> TraceScene (what
+// trace_ray consumes, render/path_tracer.h), and the world ray of a camera
+// pixel. No I/O.
+//
+// - Spheres (explicit and every packing's, via Scene::all_spheres), boxes, slabs
+//   (as boxes) and cylinders become TraceSolids in that order; glass takes the
+//   material's absolute refractive index at scene.wavelength_nm and its
+//   absorption (0 when not modelled); opaque materials become opaque solids.
+// - Rectangles (targets, textured backdrops) are NOT converted: the tracer has
+//   no zero-thickness textured surface yet. build_trace_scene counts them in
+//   TraceSceneBuildInfo::skipped_rectangles so callers can warn.
+// - The fluid index is the fluid material's absolute index at the wavelength.
+// - The sheet becomes the SheetPlane (origin, axes, extent). A scene without a
+//   sheet throws std::invalid_argument (nothing to map onto).
+#include <Eigen/Core>
+#include <optional>
+
+#include "calib/camera_model.h"
+#include "calib/rigid_transform.h"
+#include "render/path_tracer.h"
+#include "render/scene.h"
+
+namespace glasspiv {
+
+struct TraceSceneBuildInfo {
+  int spheres = 0, boxes = 0, slabs = 0, cylinders = 0;
+  int skipped_rectangles = 0;
+};
+
+// Throws InputError (via Scene::material / Material::refractive_index) for an
+// unknown material or a wavelength outside a formula's range, and
+// std::invalid_argument when the scene has no sheet.
+TraceScene build_trace_scene(const Scene& scene, TraceSceneBuildInfo* info = nullptr);
+
+// A camera ray in world coordinates: origin = the camera centre, direction unit.
+struct WorldRay {
+  Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
+};
+
+// The world ray through `pixel` (pixel (0, 0) is the centre of the top-left
+// pixel) of a camera with pose camera_from_world (p_cam = R p_world + t).
+// std::nullopt when the model cannot unproject the pixel (past a fold).
+std::optional<WorldRay> pixel_world_ray(const CameraModel& model, const RigidTransform& camera_from_world,
+                                        const Eigen::Vector2d& pixel);
+
+// The same for a scene camera (index into scene.cameras; throws
+// std::out_of_range for a bad index).
+std::optional<WorldRay> pixel_world_ray(const Scene& scene, int camera_index, const Eigen::Vector2d& pixel);
+
+}  // namespace glasspiv

@@ -1,0 +1,132 @@
+#include "render/transport_map.h"
+
+#include <algorithm>
+#include <atomic>
+#include <limits>
+#include <stdexcept>
+#include <thread>
+
+#include "render/trace_scene_builder.h"
+
+namespace glasspiv {
+
+std::size_t TransportMap::memory_bytes() const {
+  return pixel_offsets.size() * sizeof(std::uint32_t) + (s_mm.size() + t_mm.size() + weight.size()) * sizeof(float) +
+         tag.size() + (background_weight.size() + opaque_weight.size()) * sizeof(float);
+}
+
+namespace {
+
+struct RowBuffer {
+  std::vector<std::uint32_t> counts;  // crossings per pixel of the row
+  std::vector<float> s, t, w;
+  std::vector<std::uint8_t> tag;
+  std::vector<float> background, opaque;
+  long camera_rays = 0, branches = 0, no_hit_pixels = 0, unproject_failures = 0;
+};
+
+void trace_row(const TraceScene& scene, const CameraModel& camera, const RigidTransform& camera_from_world,
+               const TraceOptions& options, int k, int row, RowBuffer* out) {
+  const int width = camera.width_px();
+  const double inv_samples = 1.0 / (static_cast<double>(k) * k);
+  out->counts.assign(static_cast<std::size_t>(width), 0);
+  out->background.assign(static_cast<std::size_t>(width), 0.0f);
+  out->opaque.assign(static_cast<std::size_t>(width), 0.0f);
+  for (int col = 0; col < width; ++col) {
+    bool any_hit = false;
+    double background = 0, opaque = 0;
+    std::uint32_t count = 0;
+    for (int sy = 0; sy < k; ++sy) {
+      for (int sx = 0; sx < k; ++sx) {
+        const Eigen::Vector2d pixel(col + (sx + 0.5) / k - 0.5, row + (sy + 0.5) / k - 0.5);
+        const std::optional<WorldRay> ray = pixel_world_ray(camera, camera_from_world, pixel);
+        if (!ray) {
+          ++out->unproject_failures;
+          continue;
+        }
+        const TraceResult r = trace_ray(scene, ray->origin_mm, ray->direction, options);
+        ++out->camera_rays;
+        out->branches += r.counts.branches_traced;
+        if (r.counts.branches_traced > 1 || !r.opaque_hits.empty()) any_hit = true;
+        for (const SheetCrossing& c : r.crossings) {
+          out->s.push_back(static_cast<float>(c.s_mm));
+          out->t.push_back(static_cast<float>(c.t_mm));
+          out->w.push_back(static_cast<float>(c.weight * inv_samples));
+          out->tag.push_back(static_cast<std::uint8_t>(c.tag));
+          ++count;
+        }
+        background += r.background_weight * inv_samples;
+        opaque += r.opaque_weight * inv_samples;
+      }
+    }
+    if (!any_hit) ++out->no_hit_pixels;
+    out->counts[static_cast<std::size_t>(col)] = count;
+    out->background[static_cast<std::size_t>(col)] = static_cast<float>(background);
+    out->opaque[static_cast<std::size_t>(col)] = static_cast<float>(opaque);
+  }
+}
+
+}  // namespace
+
+TransportMap build_transport_map(const TraceScene& scene, const CameraModel& camera,
+                                 const RigidTransform& camera_from_world, const TraceOptions& options,
+                                 int samples_per_axis, int threads) {
+  if (samples_per_axis < 1) throw std::invalid_argument("build_transport_map: samples_per_axis must be >= 1");
+  const int width = camera.width_px(), height = camera.height_px();
+  if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  threads = std::min(threads, height);
+
+  std::vector<RowBuffer> rows(static_cast<std::size_t>(height));
+  std::atomic<int> next_row{0};
+  auto worker = [&]() {
+    for (int row = next_row.fetch_add(1); row < height; row = next_row.fetch_add(1))
+      trace_row(scene, camera, camera_from_world, options, samples_per_axis, row, &rows[static_cast<std::size_t>(row)]);
+  };
+  if (threads == 1) {
+    worker();
+  } else {
+    // An exception in a worker would terminate; trace_ray throws only for
+    // non-finite rays, which pixel_world_ray never produces.
+    std::vector<std::thread> pool;
+    pool.reserve(static_cast<std::size_t>(threads));
+    for (int i = 0; i < threads; ++i) pool.emplace_back(worker);
+    for (std::thread& th : pool) th.join();
+  }
+
+  TransportMap map;
+  map.width = width;
+  map.height = height;
+  map.samples_per_axis = samples_per_axis;
+  map.stats.threads = threads;
+  std::size_t total = 0;
+  for (const RowBuffer& rb : rows) total += rb.w.size();
+  if (total > std::numeric_limits<std::uint32_t>::max())
+    throw std::overflow_error("build_transport_map: more than 2^32 - 1 crossings");
+  map.pixel_offsets.reserve(map.pixel_count() + 1);
+  map.s_mm.reserve(total);
+  map.t_mm.reserve(total);
+  map.weight.reserve(total);
+  map.tag.reserve(total);
+  map.background_weight.reserve(map.pixel_count());
+  map.opaque_weight.reserve(map.pixel_count());
+  std::uint32_t offset = 0;
+  map.pixel_offsets.push_back(0);
+  for (RowBuffer& rb : rows) {
+    for (std::uint32_t c : rb.counts) map.pixel_offsets.push_back(offset += c);
+    map.s_mm.insert(map.s_mm.end(), rb.s.begin(), rb.s.end());
+    map.t_mm.insert(map.t_mm.end(), rb.t.begin(), rb.t.end());
+    map.weight.insert(map.weight.end(), rb.w.begin(), rb.w.end());
+    map.tag.insert(map.tag.end(), rb.tag.begin(), rb.tag.end());
+    map.background_weight.insert(map.background_weight.end(), rb.background.begin(), rb.background.end());
+    map.opaque_weight.insert(map.opaque_weight.end(), rb.opaque.begin(), rb.opaque.end());
+    map.stats.camera_rays += rb.camera_rays;
+    map.stats.branches_traced += rb.branches;
+    map.stats.pixels_without_solid_hit += rb.no_hit_pixels;
+    map.stats.unproject_failures += rb.unproject_failures;
+    rb = RowBuffer{};  // free as we go: peak memory ~ one copy
+  }
+  map.stats.crossings = static_cast<long>(total);
+  return map;
+}
+
+}  // namespace glasspiv
