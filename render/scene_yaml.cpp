@@ -309,13 +309,7 @@ SceneCamera read_camera_entry(Reader& r, const YAML::Node& node, const std::stri
 
 Scene parse(std::string_view contents, const std::string& path) {
   Reader r(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(std::string(contents));
-  } catch (const YAML::Exception& e) {
-    throw InputError(path, "", fmt::format("malformed YAML, line {}: {}", e.mark.line + 1, e.msg));
-  }
-  if (!root.IsMap()) throw InputError(path, "", "expected a YAML mapping of glasspiv scene fields");
+  const YAML::Node root = r.load_mapping(contents, "glasspiv scene fields");
   const Map top(r, root, "", kTopLevel);
   const YAML::Node version = top.required("glasspiv_scene");
   if (r.real(version, "glasspiv_scene") != kSceneFormatVersion)

@@ -87,13 +87,7 @@ class YamlReader : public YamlFields {
 
 Observations parse_yaml(std::string_view contents, const std::string& path) {
   const YamlReader r(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(std::string(contents));
-  } catch (const YAML::Exception& e) {
-    throw InputError(path, "", fmt::format("malformed YAML, line {}: {}", e.mark.line + 1, e.msg));
-  }
-  if (!root.IsMap()) throw InputError(path, "", "expected a YAML mapping of glasspiv observation fields");
+  const YAML::Node root = r.load_mapping(contents, "glasspiv observation fields");
   auto top = r.map(root, "", std::begin(kTopKeys), std::end(kTopKeys));
   if (r.real(top["glasspiv_observations"], "glasspiv_observations") != kVersion)
     r.fail("glasspiv_observations", top["glasspiv_observations"],

@@ -74,13 +74,7 @@ std::string default_name(const std::string& path) {
 
 TargetSpec parse_target_yaml(std::string_view contents, const std::string& path) {
   const Reader r(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(std::string(contents));
-  } catch (const YAML::Exception& e) {
-    throw InputError(path, "", fmt::format("malformed YAML, line {}: {}", e.mark.line + 1, e.msg));
-  }
-  if (!root.IsMap()) throw InputError(path, "", "expected a YAML mapping of glasspiv target fields");
+  const YAML::Node root = r.load_mapping(contents, "glasspiv target fields");
 
   std::map<std::string, YAML::Node> fields;
   std::vector<std::pair<std::string, YAML::Node>> order;

@@ -11,6 +11,17 @@
 
 namespace glasspiv {
 
+YAML::Node YamlFields::load_mapping(std::string_view contents, const std::string& what) const {
+  YAML::Node root;
+  try {
+    root = YAML::Load(std::string(contents));
+  } catch (const YAML::Exception& e) {
+    throw InputError(path_, "", fmt::format("malformed YAML, line {}: {}", e.mark.line + 1, e.msg));
+  }
+  if (!root.IsMap()) throw InputError(path_, "", "expected a YAML mapping of " + what);
+  return root;
+}
+
 void YamlFields::fail(const std::string& field, const YAML::Node& node, const std::string& problem) const {
   const int line = node.IsDefined() ? node.Mark().line : -1;
   throw InputError(path_, field, line >= 0 ? fmt::format("line {}: {}", line + 1, problem) : problem);

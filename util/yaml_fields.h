@@ -3,6 +3,7 @@
 // file, the field path and the line: the shared base of every YAML reader.
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
@@ -12,6 +13,10 @@ namespace glasspiv {
 class YamlFields {
  public:
   explicit YamlFields(std::string path) : path_(std::move(path)) {}
+
+  // Parses `contents` and checks it is a mapping; InputError naming the path
+  // and the line for malformed YAML, or "expected a YAML mapping of <what>".
+  YAML::Node load_mapping(std::string_view contents, const std::string& what) const;
 
   // Throws InputError(path, field, "line N: problem").
   [[noreturn]] void fail(const std::string& field, const YAML::Node& node, const std::string& problem) const;

@@ -44,13 +44,7 @@ class Reader : public YamlFields {
 
 std::vector<Camera> parse(std::string_view contents, const std::string& path) {
   const Reader r(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(std::string(contents));
-  } catch (const YAML::Exception& e) {
-    throw InputError(path, "", fmt::format("malformed YAML, line {}: {}", e.mark.line + 1, e.msg));
-  }
-  if (!root.IsMap()) throw InputError(path, "", "expected a YAML mapping of glasspiv camera fields");
+  const YAML::Node root = r.load_mapping(contents, "glasspiv camera fields");
 
   std::map<std::string, YAML::Node> fields;
   for (auto it = root.begin(); it != root.end(); ++it) {
