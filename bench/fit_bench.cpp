@@ -39,6 +39,7 @@
 #include "calib/fit/intrinsic_fit.h"
 #include "calib/lens_maps.h"
 #include "mrcal_peer.h"
+#include "opencv_peer.h"
 #include "synthetic_views.h"
 
 namespace {
@@ -68,28 +69,6 @@ struct Row {
   std::optional<CameraModel> camera;
 };
 
-double opencv_fit(const Observations& obs, LensModel model, CameraModel* out) {
-  std::vector<std::vector<cv::Point3f>> object;
-  std::vector<std::vector<cv::Point2f>> image;
-  for (const ViewObservations& v : obs.views) {
-    object.emplace_back();
-    image.emplace_back();
-    for (const CornerObservation& c : v.corners) {
-      object.back().emplace_back(c.board_point_mm.x(), c.board_point_mm.y(), 0.f);
-      image.back().emplace_back(c.pixel_px.x(), c.pixel_px.y());
-    }
-  }
-  cv::Mat k, d;
-  std::vector<cv::Mat> rvecs, tvecs;
-  const int flags = model == LensModel::OpenCV8 ? cv::CALIB_RATIONAL_MODEL : 0;
-  const double rms =
-      cv::calibrateCamera(object, image, cv::Size(obs.image_width_px, obs.image_height_px), k, d, rvecs, tvecs, flags);
-  std::vector<double> distortion(d.begin<double>(), d.end<double>());
-  distortion.resize(static_cast<int>(model));
-  *out = CameraModel(obs.image_width_px, obs.image_height_px, k.at<double>(0, 0), k.at<double>(1, 1),
-                     k.at<double>(0, 2), k.at<double>(1, 2), distortion);
-  return rms;
-}
 
 void bench_lens(const Lens& lens, int runs) {
   const LensModel model = lens.truth.lens_model();
@@ -123,7 +102,7 @@ void bench_lens(const Lens& lens, int runs) {
     cv::setNumThreads(threads == 1 ? 1 : default_threads);
     CameraModel opencv = lens.truth;
     double rms = 0;
-    const double t = best_seconds(runs, [&] { rms = opencv_fit(obs, model, &opencv); });
+    const double t = best_seconds(runs, [&] { rms = testing::opencv_calibrate(obs, model, &opencv); });
     rows.push_back({"cv::calibrateCamera", threads == 1 ? "1" : "default (" + std::to_string(default_threads) + ")", t,
                     rms, opencv});
   }

@@ -5,12 +5,12 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-#include <opencv2/calib3d.hpp>
 
 #include "calib/fit/intrinsic_fit.h"
 #include "calib/lens_maps.h"
 #include "targets/photo_io.h"
 #include "targets/target_detect.h"
+#include "opencv_peer.h"
 
 namespace glasspiv {
 namespace {
@@ -64,22 +64,10 @@ TEST(OpenCVLeftPhotos, FitAgreesWithCalibrateCamera) {
   options.outlier_k = 0;
   const IntrinsicFit fit = fit_intrinsics(obs, options);
 
-  std::vector<std::vector<cv::Point3f>> object;
-  std::vector<std::vector<cv::Point2f>> image;
-  for (const ViewObservations& v : obs.views) {
-    object.emplace_back();
-    image.emplace_back();
-    for (const CornerObservation& c : v.corners) {
-      object.back().emplace_back(c.board_point_mm.x(), c.board_point_mm.y(), 0.f);
-      image.back().emplace_back(c.pixel_px.x(), c.pixel_px.y());
-    }
-  }
-  cv::Mat k, d;
-  std::vector<cv::Mat> rvecs, tvecs;
-  const double opencv_rms = cv::calibrateCamera(object, image, cv::Size(640, 480), k, d, rvecs, tvecs, 0,
-                                                cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-12));
-  std::vector<double> dist(d.begin<double>(), d.end<double>());
-  const CameraModel opencv(640, 480, k.at<double>(0, 0), k.at<double>(1, 1), k.at<double>(0, 2), k.at<double>(1, 2), dist);
+  CameraModel opencv(640, 480, 1, 1, 0, 0);
+  const double opencv_rms = testing::opencv_calibrate(
+      obs, LensModel::OpenCV5, &opencv, nullptr,
+      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-12));
   const GridValues diff = projection_difference(fit.camera, opencv, 1000.0, 8.0);
   std::printf("opencv_left: glasspiv RMS %.5f px, OpenCV RMS %.5f px; projection difference RMS %.5f px, max %.5f px\n",
               fit.rms_px, opencv_rms, diff.rms_px, diff.max_px);

@@ -23,6 +23,7 @@
 #include "calib/fit/reprojection_cost.h"
 #include "calib/lens_maps.h"
 #include "mrcal_peer.h"
+#include "opencv_peer.h"
 #include "synthetic_views.h"
 #include "util/input_error.h"
 
@@ -70,31 +71,6 @@ std::string temp_dir(const std::string& name) {
   return dir.string();
 }
 
-// cv::calibrateCamera on the same corners; returns its RMS.
-double opencv_calibrate(const Observations& obs, LensModel model, CameraModel* out, double* seconds = nullptr) {
-  std::vector<std::vector<cv::Point3f>> object;
-  std::vector<std::vector<cv::Point2f>> image;
-  for (const ViewObservations& v : obs.views) {
-    object.emplace_back();
-    image.emplace_back();
-    for (const CornerObservation& c : v.corners) {
-      object.back().emplace_back(c.board_point_mm.x(), c.board_point_mm.y(), 0.f);
-      image.back().emplace_back(c.pixel_px.x(), c.pixel_px.y());
-    }
-  }
-  cv::Mat k, d;
-  std::vector<cv::Mat> rvecs, tvecs;
-  const int flags = model == LensModel::OpenCV8 ? cv::CALIB_RATIONAL_MODEL : 0;
-  const auto start = std::chrono::steady_clock::now();
-  const double rms =
-      cv::calibrateCamera(object, image, cv::Size(obs.image_width_px, obs.image_height_px), k, d, rvecs, tvecs, flags);
-  if (seconds) *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::vector<double> distortion(d.begin<double>(), d.end<double>());
-  distortion.resize(static_cast<int>(model));
-  *out = CameraModel(obs.image_width_px, obs.image_height_px, k.at<double>(0, 0), k.at<double>(1, 1),
-                     k.at<double>(0, 2), k.at<double>(1, 2), distortion);
-  return rms;
-}
 
 // cv::calibrateCamera takes float corners: round them for everyone.
 Observations rounded_to_float(Observations obs) {
@@ -204,7 +180,7 @@ TEST_P(IntrinsicFitVsOpenCV, SameOptimumAtLeastAsLowResidual) {
   const IntrinsicFit fit = fit_intrinsics(obs, options);
   expect_finite(fit);
   CameraModel theirs = truth;
-  const double opencv_rms = opencv_calibrate(obs, model, &theirs);
+  const double opencv_rms = testing::opencv_calibrate(obs, model, &theirs);
   const GridValues diff = difference(theirs, fit.camera);
   std::cout << lens_model_name(model) << ": ours rms " << fit.rms_px << ", OpenCV rms " << opencv_rms
             << ", projection difference RMS " << diff.rms_px << " max " << diff.max_px << " px; vs truth RMS "
@@ -429,7 +405,7 @@ TEST(IntrinsicFit, OverParameterisedModelIsReportedNotRefused) {
   options.outlier_k = 0;  // as OpenCV
   const IntrinsicFit fit = fit_intrinsics(obs, options);
   CameraModel theirs = truth;
-  const double opencv_rms = opencv_calibrate(obs, LensModel::OpenCV8, &theirs);
+  const double opencv_rms = testing::opencv_calibrate(obs, LensModel::OpenCV8, &theirs);
   expect_finite(fit);
   std::cout << "opencv8 on an opencv5 lens: undetermined:";
   for (const std::string& name : fit.undetermined_parameters) std::cout << " " << name;
@@ -459,7 +435,7 @@ TEST(IntrinsicFit, ExtremeBarrelDistortion) {
   expect_finite(fit);
   const GridValues diff = aligned_difference(truth, fit.camera);
   CameraModel theirs = truth;
-  const double opencv_rms = opencv_calibrate(obs, LensModel::OpenCV5, &theirs);
+  const double opencv_rms = testing::opencv_calibrate(obs, LensModel::OpenCV5, &theirs);
   std::cout << "k1 = -0.45: fx off by " << fit.camera.fx_px() - truth.fx_px() << " px; projection difference RMS "
             << diff.rms_px << " max " << diff.max_px << " px; rms " << fit.rms_px << " (OpenCV: rms " << opencv_rms
             << ", projection difference RMS " << aligned_difference(truth, theirs).rms_px << " px)\n";
