@@ -26,6 +26,10 @@ struct Hit {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // outward unit normal
   int shape_index = -1;                               // set by first_hit; -1 for a single shape
   double error_mm = 0;                                // bound on |point - exact surface point| along normal
+  // The normal that refraction and reflection use where it differs from the
+  // geometric one (smooth meshes: interpolated vertex normals, outward, unit);
+  // empty for exact solids. The geometric normal alone decides entering/leaving.
+  std::optional<Eigen::Vector3d> shading_normal;
 };
 
 struct Sphere {

@@ -4,16 +4,18 @@
 // image. Compact struct-of-arrays in CSR layout, 32-bit floats in mm. No I/O.
 //
 // Per pixel p (row-major, p = row * width + col) the crossings are
-// [pixel_offsets[p], pixel_offsets[p + 1]) in s_mm, t_mm, weight, tag.
+// [pixel_offsets[p], pixel_offsets[p + 1]) in s_mm, t_mm, weight, tag and the
+// footprint Jacobian d(s, t)/d(pixel) in ds_dcol, ds_drow, dt_dcol, dt_drow
+// (mm per pixel; col grows to the right, row grows down), carried by ray
+// differentials through every refraction and reflection.
 // With samples_per_axis = k > 1 each pixel is traced at k x k stratified
 // sub-pixel positions (cell centres of a k x k grid over the pixel's square),
 // every weight divided by k^2; crossings of all samples are listed in sample
 // order (row-major over the sub-grid). Pixel (0, 0) is the centre of the
 // top-left pixel (docs/conventions.md).
 //
-// Known limits: no ray differentials yet, so no footprint (Jacobian) per
-// crossing; a pixel whose ray cannot be unprojected (past the lens model's fold)
-// has no crossings and no background weight (counted in unproject_failures).
+// Known limit: a pixel whose ray cannot be unprojected (past the lens model's
+// fold) has no crossings and no background weight (counted in unproject_failures).
 #include <cstdint>
 #include <vector>
 
@@ -38,6 +40,7 @@ struct TransportMap {
   std::vector<std::uint32_t> pixel_offsets;  // width * height + 1
   std::vector<float> s_mm, t_mm, weight;     // per crossing
   std::vector<std::uint8_t> tag;             // per crossing: static_cast<uint8_t>(CrossingTag)
+  std::vector<float> ds_dcol, ds_drow, dt_dcol, dt_drow;  // per crossing: footprint Jacobian, mm/px
   std::vector<float> background_weight;      // per pixel: weight that left the scene
   std::vector<float> opaque_weight;          // per pixel: weight that ended on opaque solids
   TransportStats stats;
