@@ -1,13 +1,13 @@
 #pragma once
 // Forward render (DESIGN.md section 3): an image from the light-transport map
-// and a sheet radiance. pixel = sum over its crossings of weight * texture(s, t)
-// + background_weight * background_radiance (opaque surfaces contribute 0: no
-// shading yet). No I/O.
+// and a sheet radiance. pixel = sum over its crossings of weight * radiance +
+// background_weight * background_radiance (opaque surfaces contribute 0: the
+// sheet's light is all a PIV camera records). No I/O.
 //
-// KNOWN LIMIT: no footprint filtering. Each crossing samples the texture at one
-// point (s, t); minified regions alias and magnified ones are not smoothed.
-// Until the map carries ray differentials, supersampling with
-// build_transport_map(..., samples_per_axis > 1) is the anti-aliasing.
+// With a SheetTexture the radiance of a crossing is the texture's mean over the
+// crossing's footprint (its Jacobian from the map, divided by the samples per
+// axis since a sub-sample covers 1/k of the pixel): minified regions do not
+// alias. With a SheetSampler (any function of s, t) it is a point sample.
 //
 // The core works on plain float buffers so that glasspiv_render needs no
 // OpenCV; the cv::Mat entry points below are inline and appear wherever OpenCV
@@ -16,6 +16,7 @@
 #include <functional>
 #include <vector>
 
+#include "render/sheet_texture.h"
 #include "render/transport_map.h"
 
 #if __has_include(<opencv2/core.hpp>)
@@ -32,10 +33,9 @@ using SheetSampler = std::function<float(double s_mm, double t_mm)>;
 std::vector<float> forward_render_values(const TransportMap& map, const SheetSampler& texture,
                                          double background_radiance = 0);
 
-// A texture image laid on the sheet, centred on the sheet origin, mm_per_pixel
-// per texture pixel; column grows with s, row grows with -t (t is "up").
-// Bilinear; 0 outside. values: row-major, rows x cols; kept by reference.
-SheetSampler texture_sampler(const float* values, int rows, int cols, double mm_per_pixel);
+// Footprint-filtered (see above).
+std::vector<float> forward_render_values(const TransportMap& map, const SheetTexture& texture,
+                                         double background_radiance = 0);
 
 #ifdef GLASSPIV_FORWARD_RENDER_HAS_OPENCV
 // CV_32F image of map.height x map.width.
@@ -46,14 +46,18 @@ inline cv::Mat forward_render(const TransportMap& map, const SheetSampler& textu
   return image;
 }
 
-// The texture as a CV_32F (or convertible single-channel) cv::Mat; see texture_sampler.
+// The texture as a single-channel cv::Mat (any depth) laid on the sheet as
+// SheetTexture says, footprint-filtered.
 inline cv::Mat forward_render(const TransportMap& map, const cv::Mat& texture, double mm_per_pixel,
                               double background_radiance = 0) {
   cv::Mat t32;
   texture.convertTo(t32, CV_32F);
   if (!t32.isContinuous()) t32 = t32.clone();
-  return forward_render(map, texture_sampler(t32.ptr<float>(0), t32.rows, t32.cols, mm_per_pixel),
-                        background_radiance);
+  const std::vector<float> v =
+      forward_render_values(map, SheetTexture(t32.ptr<float>(0), t32.rows, t32.cols, mm_per_pixel), background_radiance);
+  cv::Mat image(map.height, map.width, CV_32F);
+  std::copy(v.begin(), v.end(), image.ptr<float>(0));
+  return image;
 }
 #endif
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "render/optics.h"
+#include "render/scene_index.h"
 
 namespace glasspiv {
 
@@ -14,10 +15,13 @@ namespace {
 
 constexpr int kFluid = -1;
 
+using Diff = Eigen::Matrix<double, 3, 2>;  // d(vector)/d(pixel col, row)
+
 struct Branch {
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();     // exact start of the segment (last hit or camera)
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();     // where the ray is traced from (anchor moved off)
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();  // unit
+  Diff danchor = Diff::Zero(), ddirection = Diff::Zero();  // ray differentials
   double weight = 1;
   int depth = 0;
   int medium = kFluid;  // kFluid or the index of the solid the branch is in
@@ -29,6 +33,17 @@ struct Branch {
 CrossingTag tag_of(const Branch& b) {
   if (!b.any_event) return CrossingTag::direct;
   return b.any_reflection ? CrossingTag::with_reflections : CrossingTag::refracted_only;
+}
+
+// Transfer of the differentials from the segment's start to the point at
+// distance u along it on a plane of normal n (Igehy 1999, eq. 9-10): the
+// footprint of the point where the ray meets that plane.
+Diff transfer(const Branch& b, double u, const Eigen::Vector3d& n) {
+  const Diff moved = b.danchor + u * b.ddirection;
+  const double dn = b.direction.dot(n);
+  if (dn == 0) return moved;  // tangent: a miss by convention, never reached with a hit
+  const Eigen::RowVector2d du = -(n.transpose() * moved) / dn;
+  return moved + b.direction * du;
 }
 
 // Records the crossing of the sheet by the segment from b.anchor along
@@ -63,38 +78,78 @@ void record_crossing(const SheetPlane& sheet, const Branch& b, const std::option
   c.tag = tag_of(b);
   c.point_mm = x;
   c.direction = b.direction;
+  const Diff dx = transfer(b, (x - b.anchor).dot(b.direction), n);
+  c.dst_dpixel.row(0) = sheet.s_axis.transpose() * dx;
+  c.dst_dpixel.row(1) = sheet.t_axis.transpose() * dx;
   out->push_back(c);
 }
 
+// Reflected direction and its differential: r = d - 2 (d.n) n.
+void reflect_with_differential(const Eigen::Vector3d& d, const Diff& dd, const Eigen::Vector3d& n, const Diff& dn,
+                               Eigen::Vector3d* r, Diff* dr) {
+  const double a = d.dot(n);
+  const Eigen::RowVector2d da = n.transpose() * dd + d.transpose() * dn;
+  *r = (d - 2 * a * n).normalized();
+  *dr = dd - 2 * (a * dn + n * da);
+}
+
+// Refracted direction's differential (Igehy 1999, eq. 15-17) for
+// t = eta d + (eta c - cos_t) m, m the normal facing the ray, c = -d.m.
+Diff refraction_differential(const Eigen::Vector3d& d, const Diff& dd, const Eigen::Vector3d& m, const Diff& dm,
+                             const Eigen::Vector3d& t, double eta) {
+  const double c = -d.dot(m);
+  const double cos_t = -t.dot(m);
+  const Eigen::RowVector2d dc = -(m.transpose() * dd + d.transpose() * dm);
+  const Eigen::RowVector2d dcos_t = (cos_t > 0 ? eta * eta * c / cos_t : 0.0) * dc;
+  return eta * dd + m * (eta * dc - dcos_t) + (eta * c - cos_t) * dm;
+}
+
+struct Workspace {
+  std::vector<Branch> stack;
+};
+
 }  // namespace
 
-TraceResult trace_ray(const TraceScene& scene, const Eigen::Vector3d& origin_mm, const Eigen::Vector3d& direction,
-                      const TraceOptions& options) {
-  const double dir_norm = direction.norm();
-  if (!origin_mm.allFinite() || !direction.allFinite() || !(dir_norm > 0))
-    throw std::invalid_argument("trace_ray: origin and direction must be finite and the direction non-zero");
-
+std::unique_ptr<SceneIndex> make_scene_index(const TraceScene& scene) {
   std::vector<Shape> shapes;
   shapes.reserve(scene.solids.size());
-  double scene_scale = 0;
-  for (const auto& solid : scene.solids) {
-    shapes.push_back(solid.shape);
-    scene_scale = std::max(scene_scale, scale_mm(solid.shape));
-  }
+  for (const auto& solid : scene.solids) shapes.push_back(solid.shape);
+  return make_scene_index(std::move(shapes));
+}
+
+void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay& ray, const TraceOptions& options,
+               TraceResult* result_out) {
+  const double dir_norm = ray.direction.norm();
+  if (!ray.origin_mm.allFinite() || !ray.direction.allFinite() || !(dir_norm > 0))
+    throw std::invalid_argument("trace_ray: origin and direction must be finite and the direction non-zero");
+
+  TraceResult& result = *result_out;
+  result.crossings.clear();
+  result.background.clear();
+  result.opaque_hits.clear();
+  result.counts = TraceCounts{};
+  result.background_weight = result.opaque_weight = result.absorbed_weight = 0;
+  result.cut_by_weight_weight = result.cut_by_depth_weight = result.skipped_reflection_weight = 0;
+
   // The camera ray is not spawned from a hit, so it gets its own guard: a
   // surface closer than this to the origin is not seen (an origin on a surface
   // starts on the side the ray travels into, like a spawned ray).
-  const double initial_t_min = 16 * kHitRelativeError * (origin_mm.cwiseAbs().maxCoeff() + scene_scale);
+  const double initial_t_min =
+      16 * kHitRelativeError * (ray.origin_mm.cwiseAbs().maxCoeff() + index.max_scale_mm());
 
-  TraceResult result;
-  std::vector<Branch> stack;
+  thread_local Workspace ws;
+  std::vector<Branch>& stack = ws.stack;
+  stack.clear();
   Branch first;
-  first.anchor = first.origin = origin_mm;
-  first.direction = direction / dir_norm;
+  first.anchor = first.origin = ray.origin_mm;
+  first.direction = ray.direction / dir_norm;
+  // d(v/|v|) = (I - u u^T) dv / |v|
+  first.ddirection = (Eigen::Matrix3d::Identity() - first.direction * first.direction.transpose()) *
+                     ray.ddirection_dpixel / dir_norm;
   first.initial = true;
   stack.push_back(first);
 
-  auto push_child = [&](Branch child) {
+  auto push_child = [&](Branch&& child) {
     if (!(child.weight > 0)) return;  // nothing to follow (R = 0 or R = 1 exactly)
     if (child.depth > options.max_depth) {
       ++result.counts.cut_by_depth;
@@ -112,13 +167,16 @@ TraceResult trace_ray(const TraceScene& scene, const Eigen::Vector3d& origin_mm,
     stack.pop_back();
     ++result.counts.branches_traced;
 
-    const double t_min = b.initial ? initial_t_min : 0.0;
     std::optional<Hit> hit;
     if (b.medium == kFluid) {
-      hit = first_hit(shapes, b.origin, b.direction, t_min);
+      if (b.initial && !index.may_hit(b.origin, b.direction)) {
+        ++result.counts.closed_form;  // nothing to meet: straight to the sheet and the background
+      } else {
+        hit = index.first_hit(b.origin, b.direction, b.initial ? initial_t_min : 0.0);
+      }
     } else {
       // Solids do not overlap: inside one, the next surface is its own.
-      hit = intersect(shapes[b.medium], b.origin, b.direction, t_min);
+      hit = intersect(scene.solids[static_cast<std::size_t>(b.medium)].shape, b.origin, b.direction, 0.0);
       if (hit) hit->shape_index = b.medium;
     }
 
@@ -140,7 +198,7 @@ TraceResult trace_ray(const TraceScene& scene, const Eigen::Vector3d& origin_mm,
                       hit ? std::optional<Eigen::Vector3d>(hit->point) : std::optional<Eigen::Vector3d>(),
                       &result.crossings);
     } else if (hit) {
-      const double alpha = scene.solids[seg_medium].material.absorption_per_mm;
+      const double alpha = scene.solids[static_cast<std::size_t>(seg_medium)].material.absorption_per_mm;
       if (alpha > 0) {
         const double kept = b.weight * beer_lambert_transmittance(alpha, (hit->point - b.anchor).norm());
         result.absorbed_weight += b.weight - kept;
@@ -160,7 +218,7 @@ TraceResult trace_ray(const TraceScene& scene, const Eigen::Vector3d& origin_mm,
       continue;
     }
 
-    const TraceSolid& solid = scene.solids[hit->shape_index];
+    const TraceSolid& solid = scene.solids[static_cast<std::size_t>(hit->shape_index)];
     if (solid.material.kind == TraceMaterial::Kind::opaque) {
       OpaqueHit oh;
       oh.solid_index = hit->shape_index;
@@ -181,15 +239,40 @@ TraceResult trace_ray(const TraceScene& scene, const Eigen::Vector3d& origin_mm,
     const double n2 = inside ? scene.fluid_index : n_glass;
     const int other_medium = inside ? kFluid : hit->shape_index;
 
-    const FresnelReflectance fr = fresnel_dielectric(std::abs(dn), n1, n2);
+    // Differentials at the hit (transfer onto the tangent plane), and of the normal.
+    const Diff dpoint = transfer(b, (hit->point - b.anchor).dot(b.direction), hit->normal);
+    // Interaction normal: the smooth one where it keeps both branches on their
+    // geometric sides, else the geometric one.
+    Eigen::Vector3d normal = hit->normal;
+    if (hit->shading_normal) {
+      const Eigen::Vector3d& sn = *hit->shading_normal;
+      const double sdn = b.direction.dot(sn);
+      const bool same_side = (sdn > 0) == (dn > 0) && sdn != 0;
+      const std::optional<Eigen::Vector3d> t_try = refract(b.direction, sn, n1 / n2);
+      const bool t_ok = !t_try || (t_try->dot(hit->normal) > 0) == (dn > 0);
+      const bool r_ok = (reflect(b.direction, sn).dot(hit->normal) > 0) != (dn > 0);
+      if (same_side && t_ok && r_ok) {
+        normal = sn;
+      } else {
+        ++result.counts.shading_fallbacks;
+      }
+    }
+    // dnormal_dpoint describes the normal the shape reports (the smooth one
+    // where there is one); a fallback to a flat face's normal has none.
+    const bool fell_back = hit->shading_normal && normal != *hit->shading_normal;
+    const Diff dnormal = fell_back ? Diff::Zero() : Diff(hit->dnormal_dpoint * dpoint);
+    const double ndn = b.direction.dot(normal);
+
+    const FresnelReflectance fr = fresnel_dielectric(std::abs(ndn), n1, n2);
     std::optional<Eigen::Vector3d> refracted;
-    if (!fr.total_internal_reflection) refracted = refract(b.direction, hit->normal, n1 / n2);
+    if (!fr.total_internal_reflection) refracted = refract(b.direction, normal, n1 / n2);
     const bool tir = !refracted;  // refract and fresnel_dielectric share the TIR test
     if (tir) ++result.counts.tir_events;
     const double reflectance = tir ? 1.0 : fr.unpolarized;
 
     Branch child;
     child.anchor = hit->point;
+    child.danchor = dpoint;
     child.depth = b.depth + 1;
     child.any_event = true;
 
@@ -200,9 +283,9 @@ TraceResult trace_ray(const TraceScene& scene, const Eigen::Vector3d& origin_mm,
         ++result.counts.reflections_skipped;
         result.skipped_reflection_weight += w_reflected;
       }
-    } else {
+    } else if (w_reflected > 0) {
       Branch r = child;
-      r.direction = reflect(b.direction, hit->normal).normalized();
+      reflect_with_differential(b.direction, b.ddirection, normal, dnormal, &r.direction, &r.ddirection);
       r.origin = spawn_origin(*hit, r.direction, seg_medium == kFluid);
       r.weight = w_reflected;
       r.medium = seg_medium;
@@ -210,8 +293,11 @@ TraceResult trace_ray(const TraceScene& scene, const Eigen::Vector3d& origin_mm,
       push_child(std::move(r));
     }
     if (refracted) {
-      Branch t = child;
+      Branch t = std::move(child);
       t.direction = *refracted;
+      const Eigen::Vector3d facing = ndn < 0 ? normal : Eigen::Vector3d(-normal);
+      const Diff dfacing = ndn < 0 ? dnormal : Diff(-dnormal);
+      t.ddirection = refraction_differential(b.direction, b.ddirection, facing, dfacing, t.direction, n1 / n2);
       t.origin = spawn_origin(*hit, t.direction, other_medium == kFluid);
       t.weight = b.weight - w_reflected;  // (1 - R) w, so that the two add up to w exactly
       t.medium = other_medium;
@@ -219,6 +305,19 @@ TraceResult trace_ray(const TraceScene& scene, const Eigen::Vector3d& origin_mm,
       push_child(std::move(t));
     }
   }
+}
+
+TraceResult trace_ray(const TraceScene& scene, const Eigen::Vector3d& origin_mm, const Eigen::Vector3d& direction,
+                      const TraceOptions& options) {
+  std::vector<Shape> shapes;
+  shapes.reserve(scene.solids.size());
+  for (const auto& solid : scene.solids) shapes.push_back(solid.shape);
+  const LinearSceneIndex index(std::move(shapes));
+  CameraRay ray;
+  ray.origin_mm = origin_mm;
+  ray.direction = direction;
+  TraceResult result;
+  trace_ray(scene, index, ray, options, &result);
   return result;
 }
 

@@ -5,23 +5,27 @@
 // what is tested are in docs/tracer.md. Double precision, mm. No I/O.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <memory>
 #include <vector>
 
+#include "render/scene_index.h"
 #include "render/shapes.h"
 
 namespace glasspiv {
 
 // Optical behaviour of a solid. Glass: a dielectric of refractive index n
 // (absolute, like the fluid's) with Beer-Lambert attenuation alpha (natural
-// log, 1/mm). Opaque: ends the branch (absorbs; shading is for later).
+// log, 1/mm). Opaque: ends the branch; albedo is its diffuse reflectance
+// (what a render of the setup shows under uniform light).
 struct TraceMaterial {
   enum class Kind { glass, opaque };
   Kind kind = Kind::glass;
   double refractive_index = 1.5;
   double absorption_per_mm = 0;
+  double albedo = 0;
 
-  static TraceMaterial glass(double n, double absorption_per_mm = 0) { return {Kind::glass, n, absorption_per_mm}; }
-  static TraceMaterial opaque() { return {Kind::opaque, 1, 0}; }
+  static TraceMaterial glass(double n, double absorption_per_mm = 0) { return {Kind::glass, n, absorption_per_mm, 0}; }
+  static TraceMaterial opaque(double albedo = 0) { return {Kind::opaque, 1, 0, albedo}; }
 };
 
 struct TraceSolid {
@@ -67,6 +71,9 @@ struct SheetCrossing {
   CrossingTag tag = CrossingTag::direct;
   Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+  // Footprint Jacobian d(s, t)/d(pixel col, row) in mm per pixel, from the ray
+  // differentials (zero when the camera ray carried none).
+  Eigen::Matrix2d dst_dpixel = Eigen::Matrix2d::Zero();
 };
 
 // A branch that left the scene (hit nothing): the background in `direction`.
@@ -94,6 +101,9 @@ struct TraceCounts {
   long tir_events = 0;       // total internal reflections
   long reflections_skipped = 0;  // reflected branches not spawned (options.reflections = false)
   long medium_corrections = 0;   // a spawned branch found itself in another medium (contacts, edges)
+  long closed_form = 0;          // camera rays proven to miss every solid (bounds test): no BVH query
+  long shading_fallbacks = 0;    // events where a smooth normal would have sent the ray to the wrong
+                                 // side of the surface, so the geometric normal was used
 };
 
 // Where the unit weight of the camera ray went. Every bit of it ends in exactly
@@ -116,10 +126,29 @@ struct TraceResult {
   }
 };
 
-// Traces one ray (direction need not be unit; it is normalised) through the
-// scene. Throws std::invalid_argument for a zero or non-finite direction or
-// origin. Deterministic: the same input gives the same output, branch order
-// included (depth first, refracted branch before reflected).
+// A camera ray with its ray differentials: how the direction changes per pixel
+// of the image (col, row); a central camera's origin does not change.
+struct CameraRay {
+  Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  // need not be unit; normalised (with its derivative)
+  Eigen::Matrix<double, 3, 2> ddirection_dpixel = Eigen::Matrix<double, 3, 2>::Zero();
+};
+
+// The nearest-hit index of the scene's solids (Embree for all but tiny scenes).
+std::unique_ptr<SceneIndex> make_scene_index(const TraceScene& scene);
+
+// Traces one camera ray through the scene into *result (cleared first; its
+// buffers are reused, so a caller tracing many rays allocates once). index must
+// have been made from this scene. Ray differentials are carried through every
+// transfer, refraction and reflection (Igehy 1999), giving each crossing its
+// footprint Jacobian. Throws std::invalid_argument for a zero or non-finite
+// direction or origin. Deterministic: the same input gives the same output,
+// branch order included (depth first, refracted branch before reflected).
+void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay& ray, const TraceOptions& options,
+               TraceResult* result);
+
+// The same with a linear search over the solids and no differentials: the
+// reference tracer of the tests (slow for big scenes; no setup needed).
 TraceResult trace_ray(const TraceScene& scene, const Eigen::Vector3d& origin_mm, const Eigen::Vector3d& direction,
                       const TraceOptions& options = {});
 

@@ -63,6 +63,7 @@ std::optional<Hit> intersect(const Sphere& s, const Eigen::Vector3d& o, const Ei
   if (!(len > 0)) return std::nullopt;
   h.normal = radial / len;
   h.point = s.centre_mm + s.radius_mm * h.normal;  // back onto the sphere (pbrt's reprojection)
+  h.dnormal_dpoint = Eigen::Matrix3d::Identity() / s.radius_mm;
   h.error_mm = error_bound(h.point, inf_norm(s.centre_mm) + s.radius_mm);
   return h;
 }
@@ -160,11 +161,30 @@ std::optional<Hit> intersect(const Cylinder& c, const Eigen::Vector3d& o, const 
     if (!(len > 0)) return std::nullopt;
     hit.normal = radial / len;
     hit.point = c.centre_mm + (fa + da * t) * a + r * hit.normal;
+    hit.dnormal_dpoint = (Eigen::Matrix3d::Identity() - a * a.transpose()) / r;
   } else {
     hit.normal = best->kind * a;
     hit.point = c.centre_mm + (best->kind * hl) * a + radial;
   }
   hit.error_mm = error_bound(hit.point, 2 * inf_norm(c.centre_mm) + r);
+  return hit;
+}
+
+std::optional<Hit> intersect(const Rectangle& r, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min) {
+  const Eigen::Vector3d n = r.normal();
+  const double dn = d.dot(n);
+  if (dn == 0) return std::nullopt;  // in the plane: tangent, a miss
+  const Eigen::Vector3d f = r.centre_mm - o;
+  const double t = f.dot(n) / dn;
+  if (!(t > t_min)) return std::nullopt;
+  const Eigen::Vector3d rel = o + t * d - r.centre_mm;
+  const double u = rel.dot(r.right), v = rel.dot(r.up);
+  if (!(std::abs(u) <= r.half_width_mm && std::abs(v) <= r.half_height_mm)) return std::nullopt;
+  Hit hit;
+  hit.t = t;
+  hit.point = r.centre_mm + u * r.right + v * r.up;  // exactly in the plane
+  hit.normal = dn < 0 ? n : Eigen::Vector3d(-n);       // faces the ray: it is entered
+  hit.error_mm = error_bound(hit.point, 2 * inf_norm(r.centre_mm));
   return hit;
 }
 
@@ -185,7 +205,26 @@ std::optional<Hit> first_hit(const std::vector<Shape>& shapes, const Eigen::Vect
   return best;
 }
 
+Eigen::AlignedBox3d bounds_mm(const Shape& shape) {
+  if (const auto* s = std::get_if<Sphere>(&shape))
+    return {s->centre_mm.array() - s->radius_mm, s->centre_mm.array() + s->radius_mm};
+  if (const auto* b = std::get_if<Box>(&shape)) {
+    const Eigen::Vector3d half = b->world_from_box.cwiseAbs() * b->half_extent_mm;
+    return {b->centre_mm - half, b->centre_mm + half};
+  }
+  if (const auto* r = std::get_if<Rectangle>(&shape)) {
+    const Eigen::Vector3d half = r->half_width_mm * r->right.cwiseAbs() + r->half_height_mm * r->up.cwiseAbs();
+    return {r->centre_mm - half, r->centre_mm + half};
+  }
+  const auto& c = std::get<Cylinder>(shape);
+  // Each cap disc spans r sqrt(1 - a_i^2) along axis i.
+  const Eigen::Vector3d disc = c.radius_mm * (Eigen::Vector3d::Ones() - c.axis.cwiseAbs2()).cwiseMax(0.0).cwiseSqrt();
+  const Eigen::Vector3d half = c.half_length_mm * c.axis.cwiseAbs() + disc;
+  return {c.centre_mm - half, c.centre_mm + half};
+}
+
 bool contains(const Shape& shape, const Eigen::Vector3d& p, double margin_mm) {
+  if (std::holds_alternative<Rectangle>(shape)) return false;  // no inside
   if (const auto* s = std::get_if<Sphere>(&shape)) return (p - s->centre_mm).norm() < s->radius_mm - margin_mm;
   if (const auto* b = std::get_if<Box>(&shape)) {
     const Eigen::Vector3d lp = b->world_from_box.transpose() * (p - b->centre_mm);
@@ -200,6 +239,7 @@ bool contains(const Shape& shape, const Eigen::Vector3d& p, double margin_mm) {
 double scale_mm(const Shape& shape) {
   if (const auto* s = std::get_if<Sphere>(&shape)) return inf_norm(s->centre_mm) + s->radius_mm;
   if (const auto* b = std::get_if<Box>(&shape)) return 2 * inf_norm(b->centre_mm) + b->half_extent_mm.minCoeff();
+  if (const auto* r = std::get_if<Rectangle>(&shape)) return 2 * inf_norm(r->centre_mm);
   const auto& c = std::get<Cylinder>(shape);
   return 2 * inf_norm(c.centre_mm) + c.radius_mm;
 }

@@ -14,6 +14,7 @@
 //   travelled; spawn_origin() uses that bound to start the continuing ray on
 //   the correct side (the one place where self-intersection is handled).
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <optional>
 #include <variant>
 #include <vector>
@@ -30,6 +31,9 @@ struct Hit {
   // geometric one (smooth meshes: interpolated vertex normals, outward, unit);
   // empty for exact solids. The geometric normal alone decides entering/leaving.
   std::optional<Eigen::Vector3d> shading_normal;
+  // d(normal)/d(point) along the surface (the shape operator; zero for planes):
+  // ray differentials use it to carry footprints through curved interfaces.
+  Eigen::Matrix3d dnormal_dpoint = Eigen::Matrix3d::Zero();
 };
 
 struct Sphere {
@@ -55,7 +59,20 @@ struct Cylinder {
   double half_length_mm = 1;
 };
 
-using Shape = std::variant<Sphere, Box, Cylinder>;
+// A thin two-sided rectangle (target, marker sheet, backdrop): centre_mm, unit
+// in-plane axes right and up, half sizes along them. It has no inside: its
+// normal always faces the incoming ray, so a ray meeting it enters it (and the
+// tracer only allows rectangles of opaque material).
+struct Rectangle {
+  Eigen::Vector3d centre_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d right = Eigen::Vector3d::UnitX();
+  Eigen::Vector3d up = Eigen::Vector3d::UnitY();
+  double half_width_mm = 1, half_height_mm = 1;
+
+  Eigen::Vector3d normal() const { return right.cross(up); }
+};
+
+using Shape = std::variant<Sphere, Box, Cylinder, Rectangle>;
 
 // A slab: a box of the given thickness along the unit normal through centre,
 // extending half_extent_mm either way in the plane.
@@ -65,11 +82,16 @@ Box make_slab(const Eigen::Vector3d& centre_mm, const Eigen::Vector3d& normal, d
 std::optional<Hit> intersect(const Sphere& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min);
 std::optional<Hit> intersect(const Box& b, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min);
 std::optional<Hit> intersect(const Cylinder& c, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min);
+std::optional<Hit> intersect(const Rectangle& r, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min);
 std::optional<Hit> intersect(const Shape& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min);
 
 // The nearest hit over all shapes (ties: the lower index), shape_index set.
 std::optional<Hit> first_hit(const std::vector<Shape>& shapes, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                              double t_min);
+
+// Axis-aligned world bounds of the solid (exact for spheres and rectangles,
+// tight for boxes and cylinders).
+Eigen::AlignedBox3d bounds_mm(const Shape& s);
 
 // Whether p lies strictly inside the solid by more than margin_mm (tests, checks).
 bool contains(const Shape& s, const Eigen::Vector3d& p, double margin_mm = 0);
@@ -77,7 +99,7 @@ bool contains(const Shape& s, const Eigen::Vector3d& p, double margin_mm = 0);
 // The magnitude, besides |p|, that the rounding error of a hit point p scales
 // with: |centre|_inf + radius (sphere), 2 |centre|_inf + smallest half extent
 // (box, whose face coordinate is exact in its own frame), 2 |centre|_inf +
-// radius (cylinder).
+// radius (cylinder), 2 |centre|_inf (rectangle).
 double scale_mm(const Shape& s);
 
 // Relative error bound for hit points and spawned origins: 64 ulp of the

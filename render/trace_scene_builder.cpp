@@ -1,5 +1,6 @@
 #include "render/trace_scene_builder.h"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace glasspiv {
@@ -69,6 +70,24 @@ std::optional<WorldRay> pixel_world_ray(const CameraModel& model, const RigidTra
   const Eigen::Matrix3d world_from_camera = camera_from_world.rotation.transpose();
   r.origin_mm = -(world_from_camera * camera_from_world.translation_mm);
   r.direction = (world_from_camera * u.ray_camera).normalized();
+  return r;
+}
+
+std::optional<CameraRay> pixel_camera_ray(const CameraModel& model, const RigidTransform& camera_from_world,
+                                          const Eigen::Vector2d& pixel) {
+  const UnprojectResult u = model.unproject(pixel);
+  if (!u.ok()) return std::nullopt;
+  Eigen::Matrix2d dpixel_dnormalized;
+  model.project_normalized(u.normalized, &dpixel_dnormalized);
+  const double det = dpixel_dnormalized.determinant();
+  if (!(std::abs(det) > 0) || !std::isfinite(det)) return std::nullopt;  // singular: at a fold
+  Eigen::Matrix<double, 3, 2> dray_dpixel = Eigen::Matrix<double, 3, 2>::Zero();
+  dray_dpixel.topRows<2>() = dpixel_dnormalized.inverse();
+  const Eigen::Matrix3d world_from_camera = camera_from_world.rotation.transpose();
+  CameraRay r;
+  r.origin_mm = -(world_from_camera * camera_from_world.translation_mm);
+  r.direction = world_from_camera * Eigen::Vector3d(u.normalized.x(), u.normalized.y(), 1.0);
+  r.ddirection_dpixel = world_from_camera * dray_dpixel;
   return r;
 }
 

@@ -45,6 +45,12 @@ struct WorldRay {
 std::optional<WorldRay> pixel_world_ray(const CameraModel& model, const RigidTransform& camera_from_world,
                                         const Eigen::Vector2d& pixel);
 
+// The camera ray through `pixel` with its ray differentials d(direction)/d(pixel),
+// from the lens model's analytic Jacobian (the direction is left unnormalised:
+// (x, y, 1) in the camera frame, rotated to the world). std::nullopt as above.
+std::optional<CameraRay> pixel_camera_ray(const CameraModel& model, const RigidTransform& camera_from_world,
+                                          const Eigen::Vector2d& pixel);
+
 // The same for a scene camera (index into scene.cameras; throws
 // std::out_of_range for a bad index).
 std::optional<WorldRay> pixel_world_ray(const Scene& scene, int camera_index, const Eigen::Vector2d& pixel);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <limits>
 #include <stdexcept>
 #include <thread>
@@ -11,7 +12,9 @@
 namespace glasspiv {
 
 std::size_t TransportMap::memory_bytes() const {
-  return pixel_offsets.size() * sizeof(std::uint32_t) + (s_mm.size() + t_mm.size() + weight.size()) * sizeof(float) +
+  return pixel_offsets.size() * sizeof(std::uint32_t) +
+         (s_mm.size() + t_mm.size() + weight.size() + ds_dcol.size() + ds_drow.size() + dt_dcol.size() +
+          dt_drow.size()) * sizeof(float) +
          tag.size() + (background_weight.size() + opaque_weight.size()) * sizeof(float);
 }
 
@@ -19,14 +22,18 @@ namespace {
 
 struct RowBuffer {
   std::vector<std::uint32_t> counts;  // crossings per pixel of the row
-  std::vector<float> s, t, w;
+  std::vector<float> s, t, w, ds_dcol, ds_drow, dt_dcol, dt_drow;
   std::vector<std::uint8_t> tag;
   std::vector<float> background, opaque;
   long camera_rays = 0, branches = 0, no_hit_pixels = 0, unproject_failures = 0;
+  long closed_form = 0, cut_by_weight = 0, cut_by_depth = 0, reflections_skipped = 0;
+  double cut_weight = 0;
 };
 
-void trace_row(const TraceScene& scene, const CameraModel& camera, const RigidTransform& camera_from_world,
-               const TraceOptions& options, int k, int row, RowBuffer* out) {
+void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
+               const RigidTransform& camera_from_world, const TraceOptions& options, int k, int row,
+               RowBuffer* out) {
+  thread_local TraceResult r;  // reused: no allocation per ray
   const int width = camera.width_px();
   const double inv_samples = 1.0 / (static_cast<double>(k) * k);
   out->counts.assign(static_cast<std::size_t>(width), 0);
@@ -39,20 +46,29 @@ void trace_row(const TraceScene& scene, const CameraModel& camera, const RigidTr
     for (int sy = 0; sy < k; ++sy) {
       for (int sx = 0; sx < k; ++sx) {
         const Eigen::Vector2d pixel(col + (sx + 0.5) / k - 0.5, row + (sy + 0.5) / k - 0.5);
-        const std::optional<WorldRay> ray = pixel_world_ray(camera, camera_from_world, pixel);
+        const std::optional<CameraRay> ray = pixel_camera_ray(camera, camera_from_world, pixel);
         if (!ray) {
           ++out->unproject_failures;
           continue;
         }
-        const TraceResult r = trace_ray(scene, ray->origin_mm, ray->direction, options);
+        trace_ray(scene, index, *ray, options, &r);
         ++out->camera_rays;
         out->branches += r.counts.branches_traced;
+        out->closed_form += r.counts.closed_form;
+        out->cut_by_weight += r.counts.cut_by_weight;
+        out->cut_by_depth += r.counts.cut_by_depth;
+        out->reflections_skipped += r.counts.reflections_skipped;
+        out->cut_weight += (r.cut_by_weight_weight + r.cut_by_depth_weight + r.skipped_reflection_weight) * inv_samples;
         if (r.counts.branches_traced > 1 || !r.opaque_hits.empty()) any_hit = true;
         for (const SheetCrossing& c : r.crossings) {
           out->s.push_back(static_cast<float>(c.s_mm));
           out->t.push_back(static_cast<float>(c.t_mm));
           out->w.push_back(static_cast<float>(c.weight * inv_samples));
           out->tag.push_back(static_cast<std::uint8_t>(c.tag));
+          out->ds_dcol.push_back(static_cast<float>(c.dst_dpixel(0, 0)));
+          out->ds_drow.push_back(static_cast<float>(c.dst_dpixel(0, 1)));
+          out->dt_dcol.push_back(static_cast<float>(c.dst_dpixel(1, 0)));
+          out->dt_drow.push_back(static_cast<float>(c.dst_dpixel(1, 1)));
           ++count;
         }
         background += r.background_weight * inv_samples;
@@ -70,28 +86,38 @@ void trace_row(const TraceScene& scene, const CameraModel& camera, const RigidTr
 
 TransportMap build_transport_map(const TraceScene& scene, const CameraModel& camera,
                                  const RigidTransform& camera_from_world, const TraceOptions& options,
-                                 int samples_per_axis, int threads) {
+                                 int samples_per_axis, int threads, const std::function<void(int, int)>& progress) {
   if (samples_per_axis < 1) throw std::invalid_argument("build_transport_map: samples_per_axis must be >= 1");
   const int width = camera.width_px(), height = camera.height_px();
   if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   threads = std::min(threads, height);
 
+  const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
   std::vector<RowBuffer> rows(static_cast<std::size_t>(height));
-  std::atomic<int> next_row{0};
+  std::atomic<int> next_row{0}, rows_done{0};
   auto worker = [&]() {
-    for (int row = next_row.fetch_add(1); row < height; row = next_row.fetch_add(1))
-      trace_row(scene, camera, camera_from_world, options, samples_per_axis, row, &rows[static_cast<std::size_t>(row)]);
+    for (int row = next_row.fetch_add(1); row < height; row = next_row.fetch_add(1)) {
+      trace_row(scene, *index, camera, camera_from_world, options, samples_per_axis, row,
+                &rows[static_cast<std::size_t>(row)]);
+      rows_done.fetch_add(1);
+    }
   };
-  if (threads == 1) {
-    worker();
-  } else {
-    // An exception in a worker would terminate; trace_ray throws only for
-    // non-finite rays, which pixel_world_ray never produces.
-    std::vector<std::thread> pool;
-    pool.reserve(static_cast<std::size_t>(threads));
-    for (int i = 0; i < threads; ++i) pool.emplace_back(worker);
-    for (std::thread& th : pool) th.join();
+  // An exception in a worker would terminate; trace_ray throws only for
+  // non-finite rays, which pixel_camera_ray never produces. The calling thread
+  // reports progress while the pool works.
+  std::vector<std::thread> pool;
+  pool.reserve(static_cast<std::size_t>(threads));
+  for (int i = 0; i < threads; ++i) pool.emplace_back(worker);
+  if (progress) {
+    int reported = -1;
+    while (true) {
+      const int done = rows_done.load();
+      if (done != reported) progress(reported = done, height);
+      if (done >= height) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
   }
+  for (std::thread& th : pool) th.join();
 
   TransportMap map;
   map.width = width;
@@ -107,6 +133,7 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
   map.t_mm.reserve(total);
   map.weight.reserve(total);
   map.tag.reserve(total);
+  for (auto* v : {&map.ds_dcol, &map.ds_drow, &map.dt_dcol, &map.dt_drow}) v->reserve(total);
   map.background_weight.reserve(map.pixel_count());
   map.opaque_weight.reserve(map.pixel_count());
   std::uint32_t offset = 0;
@@ -117,12 +144,21 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
     map.t_mm.insert(map.t_mm.end(), rb.t.begin(), rb.t.end());
     map.weight.insert(map.weight.end(), rb.w.begin(), rb.w.end());
     map.tag.insert(map.tag.end(), rb.tag.begin(), rb.tag.end());
+    map.ds_dcol.insert(map.ds_dcol.end(), rb.ds_dcol.begin(), rb.ds_dcol.end());
+    map.ds_drow.insert(map.ds_drow.end(), rb.ds_drow.begin(), rb.ds_drow.end());
+    map.dt_dcol.insert(map.dt_dcol.end(), rb.dt_dcol.begin(), rb.dt_dcol.end());
+    map.dt_drow.insert(map.dt_drow.end(), rb.dt_drow.begin(), rb.dt_drow.end());
     map.background_weight.insert(map.background_weight.end(), rb.background.begin(), rb.background.end());
     map.opaque_weight.insert(map.opaque_weight.end(), rb.opaque.begin(), rb.opaque.end());
     map.stats.camera_rays += rb.camera_rays;
     map.stats.branches_traced += rb.branches;
     map.stats.pixels_without_solid_hit += rb.no_hit_pixels;
     map.stats.unproject_failures += rb.unproject_failures;
+    map.stats.closed_form_rays += rb.closed_form;
+    map.stats.branches_cut_by_weight += rb.cut_by_weight;
+    map.stats.branches_cut_by_depth += rb.cut_by_depth;
+    map.stats.reflections_skipped += rb.reflections_skipped;
+    map.stats.cut_weight += rb.cut_weight;
     rb = RowBuffer{};  // free as we go: peak memory ~ one copy
   }
   map.stats.crossings = static_cast<long>(total);

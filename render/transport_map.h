@@ -17,6 +17,7 @@
 // Known limit: a pixel whose ray cannot be unprojected (past the lens model's
 // fold) has no crossings and no background weight (counted in unproject_failures).
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "calib/camera_model.h"
@@ -25,12 +26,18 @@
 
 namespace glasspiv {
 
+// What the build did and what it skipped (docs/tracer.md).
 struct TransportStats {
   long camera_rays = 0;        // camera rays traced (pixels x samples)
   long branches_traced = 0;    // segments followed, summed over all rays (TraceCounts)
   long crossings = 0;          // sheet crossings stored
   long pixels_without_solid_hit = 0;  // no sample of the pixel met any solid
   long unproject_failures = 0;        // samples whose pixel ray could not be computed
+  long closed_form_rays = 0;          // camera rays proven to miss all solids: no BVH query
+  long branches_cut_by_weight = 0;    // below TraceOptions::min_weight
+  long branches_cut_by_depth = 0;     // beyond TraceOptions::max_depth
+  long reflections_skipped = 0;       // not spawned (TraceOptions::reflections = false)
+  double cut_weight = 0;              // weight of those three, summed over pixels (1 = one whole pixel)
   int threads = 0;                    // threads used
 };
 
@@ -56,8 +63,11 @@ struct TransportMap {
 // buffers are concatenated in row order, so the output is bit-identical for any
 // thread count. Throws std::invalid_argument for samples_per_axis < 1 and
 // std::overflow_error beyond 2^32 - 1 crossings.
+// progress (optional) is called from the calling thread with (rows done, rows)
+// about every 1/100 of the work; it must not throw.
 TransportMap build_transport_map(const TraceScene& scene, const CameraModel& camera,
                                  const RigidTransform& camera_from_world, const TraceOptions& options,
-                                 int samples_per_axis = 1, int threads = 0);
+                                 int samples_per_axis = 1, int threads = 0,
+                                 const std::function<void(int, int)>& progress = {});
 
 }  // namespace glasspiv

@@ -162,15 +162,6 @@ TEST(ForwardRender, ConstantTextureGivesTheSheetWeight) {
   EXPECT_TRUE(multiple);  // inter-reflections in the slab reach the sheet
 }
 
-TEST(ForwardRender, TextureSamplerIsBilinearAndCentred) {
-  const cv::Mat tex = (cv::Mat_<float>(2, 3) << 0, 1, 2, 3, 4, 5);
-  const SheetSampler f = texture_sampler(tex.ptr<float>(0), 2, 3, 2.0);
-  EXPECT_FLOAT_EQ(f(0, 0), 2.5f);     // centre of the texture
-  EXPECT_FLOAT_EQ(f(-2, 1), 0.0f);    // column 0, row 0
-  EXPECT_FLOAT_EQ(f(2, -1), 5.0f);    // column 2, row 1
-  EXPECT_FLOAT_EQ(f(100, 0), 0.0f);   // outside
-}
-
 TEST(TransportMap, DeterministicOverThreadCounts) {
   TraceScene scene = slab_scene(1.5, 10);
   scene.solids.push_back({Sphere{Eigen::Vector3d(3, -2, 120), 15}, TraceMaterial::glass(1.6, 0.01)});

@@ -1,0 +1,183 @@
+#include "render/scene_index.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "render/embree_device.h"
+
+namespace glasspiv {
+
+namespace {
+
+Eigen::AlignedBox3d union_bounds(const std::vector<Shape>& shapes) {
+  Eigen::AlignedBox3d box;  // empty
+  for (const Shape& s : shapes) box.extend(bounds_mm(s));
+  return box;
+}
+
+// Keeps (t, index) lexicographically smallest: the nearest hit, ties to the
+// lower index, whatever order the candidates come in.
+void keep_nearest(std::optional<Hit>&& h, int index, std::optional<Hit>* best) {
+  if (!h) return;
+  if (*best && !(h->t < (*best)->t || (h->t == (*best)->t && index < (*best)->shape_index))) return;
+  h->shape_index = index;
+  *best = std::move(h);
+}
+
+}  // namespace
+
+SceneIndex::SceneIndex(const std::vector<Shape>& shapes) : bounds_(union_bounds(shapes)) {
+  for (const Shape& s : shapes) max_scale_ = std::max(max_scale_, scale_mm(s));
+}
+
+bool SceneIndex::may_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const {
+  if (bounds_.isEmpty()) return false;
+  // A generous margin: the test must never reject what an exact intersect
+  // would accept (a grazing ray on the box's face).
+  const double margin = 1e-6 * (bounds_.max().cwiseAbs().maxCoeff() + bounds_.min().cwiseAbs().maxCoeff() + 1.0);
+  double t_near = -std::numeric_limits<double>::infinity(), t_far = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i) {
+    const double lo = bounds_.min()[i] - margin, hi = bounds_.max()[i] + margin;
+    if (d[i] == 0) {
+      if (o[i] < lo || o[i] > hi) return false;
+      continue;
+    }
+    double ta = (lo - o[i]) / d[i], tb = (hi - o[i]) / d[i];
+    if (ta > tb) std::swap(ta, tb);
+    t_near = std::max(t_near, ta);
+    t_far = std::min(t_far, tb);
+  }
+  return t_near <= t_far && t_far >= 0;
+}
+
+LinearSceneIndex::LinearSceneIndex(std::vector<Shape> shapes) : SceneIndex(shapes), shapes_(std::move(shapes)) {}
+
+std::optional<Hit> LinearSceneIndex::first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                               double t_min) const {
+  std::optional<Hit> best;
+  for (std::size_t i = 0; i < shapes_.size(); ++i) keep_nearest(intersect(shapes_[i], o, d, t_min), static_cast<int>(i), &best);
+  return best;
+}
+
+// ---------------------------------------------------------------------------
+// Embree: one user geometry, one primitive per solid. Embree traverses its BVH
+// with a float copy of the ray; the primitive callback runs the exact double
+// intersect on the double ray carried in the context. Boxes are padded so that
+// the float traversal never skips a solid the double ray meets.
+
+struct EmbreeSceneIndex::Impl {
+  RTCScene scene = nullptr;
+  std::vector<Shape> shapes;
+  std::vector<Eigen::AlignedBox3d> padded;
+};
+
+namespace {
+
+struct QueryContext {
+  RTCIntersectContext base;  // first member: Embree hands back a pointer to it
+  const std::vector<Shape>* shapes;
+  const Eigen::Vector3d* o;
+  const Eigen::Vector3d* d;
+  double t_min;
+  std::optional<Hit> best;
+};
+
+void solid_bounds(const RTCBoundsFunctionArguments* args) {
+  const auto* boxes = static_cast<const std::vector<Eigen::AlignedBox3d>*>(args->geometryUserPtr);
+  const Eigen::AlignedBox3d& b = (*boxes)[args->primID];
+  RTCBounds* out = args->bounds_o;
+  // Rounded outwards so the float box contains the double one.
+  out->lower_x = std::nextafter(static_cast<float>(b.min().x()), -INFINITY);
+  out->lower_y = std::nextafter(static_cast<float>(b.min().y()), -INFINITY);
+  out->lower_z = std::nextafter(static_cast<float>(b.min().z()), -INFINITY);
+  out->upper_x = std::nextafter(static_cast<float>(b.max().x()), INFINITY);
+  out->upper_y = std::nextafter(static_cast<float>(b.max().y()), INFINITY);
+  out->upper_z = std::nextafter(static_cast<float>(b.max().z()), INFINITY);
+}
+
+void solid_intersect(const RTCIntersectFunctionNArguments* args) {
+  if (!args->valid[0]) return;
+  auto* q = reinterpret_cast<QueryContext*>(args->context);
+  const int index = static_cast<int>(args->primID);
+  keep_nearest(intersect((*q->shapes)[args->primID], *q->o, *q->d, q->t_min), index, &q->best);
+  if (q->best) {
+    // Let Embree cull candidates beyond the best hit, conservatively (next float up).
+    float& tfar = RTCRayN_tfar(RTCRayHitN_RayN(args->rayhit, args->N), args->N, 0);
+    tfar = std::min(tfar, std::nextafter(static_cast<float>(q->best->t), INFINITY));
+  }
+}
+
+}  // namespace
+
+EmbreeSceneIndex::EmbreeSceneIndex(std::vector<Shape> shapes) : SceneIndex(shapes), impl_(std::make_unique<Impl>()) {
+  impl_->shapes = std::move(shapes);
+  // Float traversal error: about 1.2e-7 of (|origin| + distance travelled);
+  // 1e-4 of the scene's size covers origins up to ~100 scene sizes away.
+  const double magnitude = bounds_.isEmpty() ? 1.0
+                                             : std::max({bounds_.min().cwiseAbs().maxCoeff(),
+                                                         bounds_.max().cwiseAbs().maxCoeff(), 1.0});
+  const double pad = 1e-4 * magnitude;
+  for (const Shape& s : impl_->shapes) {
+    Eigen::AlignedBox3d b = glasspiv::bounds_mm(s);
+    b.min().array() -= pad;
+    b.max().array() += pad;
+    impl_->padded.push_back(b);
+  }
+  RTCDevice device = embree_device();
+  impl_->scene = rtcNewScene(device);
+  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+  if (!impl_->shapes.empty()) {
+    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(geometry, static_cast<unsigned>(impl_->shapes.size()));
+    rtcSetGeometryUserData(geometry, &impl_->padded);
+    rtcSetGeometryBoundsFunction(geometry, solid_bounds, nullptr);
+    rtcSetGeometryIntersectFunction(geometry, solid_intersect);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(impl_->scene, geometry);
+    rtcReleaseGeometry(geometry);
+  }
+  rtcCommitScene(impl_->scene);
+  check_embree("building the scene BVH");
+}
+
+EmbreeSceneIndex::~EmbreeSceneIndex() {
+  if (impl_ && impl_->scene) rtcReleaseScene(impl_->scene);
+}
+
+std::optional<Hit> EmbreeSceneIndex::first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                               double t_min) const {
+  QueryContext q;
+  rtcInitIntersectContext(&q.base);
+  q.shapes = &impl_->shapes;
+  q.o = &o;
+  q.d = &d;
+  q.t_min = t_min;
+  RTCRayHit rh;
+  rh.ray.org_x = static_cast<float>(o.x());
+  rh.ray.org_y = static_cast<float>(o.y());
+  rh.ray.org_z = static_cast<float>(o.z());
+  rh.ray.dir_x = static_cast<float>(d.x());
+  rh.ray.dir_y = static_cast<float>(d.y());
+  rh.ray.dir_z = static_cast<float>(d.z());
+  rh.ray.tnear = 0.0f;  // t_min is applied in double by the callback
+  rh.ray.tfar = INFINITY;
+  rh.ray.time = 0.0f;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->scene, &q.base, &rh);
+  return std::move(q.best);
+}
+
+std::unique_ptr<SceneIndex> make_scene_index(std::vector<Shape> shapes) {
+  if (shapes.size() < 4) return std::make_unique<LinearSceneIndex>(std::move(shapes));
+  return std::make_unique<EmbreeSceneIndex>(std::move(shapes));
+}
+
+}  // namespace glasspiv
