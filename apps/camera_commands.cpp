@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "apps/camera_text.h"
+#include "apps/cli_files.h"
 #include "apps/commands.h"
 #include "apps/plots.h"
 #include "calib/io/camera_file.h"
@@ -13,7 +14,6 @@
 
 namespace glasspiv {
 namespace {
-namespace fs = std::filesystem;
 
 struct ConvertOptions {
   std::string input, output, to, camera, name;
@@ -30,12 +30,6 @@ struct CompareOptions {
   double distance_mm = 1000, step_px = 16;
   bool use_poses = false;
 };
-
-void check_not_input(const std::string& input, const std::string& output) {
-  std::error_code ec;
-  if (fs::exists(output, ec) && fs::equivalent(input, output, ec))
-    throw InputError(output, "", "is the input file; glasspiv never overwrites its inputs");
-}
 
 void run_convert(const ConvertOptions& o) {
   check_not_input(o.input, o.output);

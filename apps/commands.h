@@ -10,6 +10,7 @@ void register_camera_commands(CLI::App& app);
 void register_demo_command(CLI::App& app);
 void register_target_commands(CLI::App& app);
 void register_calib_commands(CLI::App& app);
+void register_render_command(CLI::App& app);
 // Called by register_calib_commands on its `calib` group.
 void register_calib_detect_command(CLI::App& calib);
 

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   glasspiv::register_demo_command(app);
   glasspiv::register_target_commands(app);
   glasspiv::register_calib_commands(app);
+  glasspiv::register_render_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

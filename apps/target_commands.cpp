@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "apps/cli_files.h"
 #include "apps/commands.h"
 #include "targets/target_image.h"
 #include "targets/target_spec.h"
@@ -13,24 +14,11 @@
 
 namespace glasspiv {
 namespace {
-namespace fs = std::filesystem;
 
 struct PrintOptions {
   std::string spec, svg, png;
   double dpi = 300;
 };
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
-void check_not_input(const std::string& input, const std::string& output) {
-  std::error_code ec;
-  if (fs::exists(output, ec) && fs::equivalent(input, output, ec))
-    throw InputError(output, "", "is the input file; glasspiv never overwrites its inputs");
-}
 
 void run_print(const PrintOptions& o) {
   if (o.svg.empty() && o.png.empty()) throw InputError("", "-o", "give -o BOARD.svg, --png BOARD.png or both");

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "util/input_error.h"
+
 namespace glasspiv {
 
 namespace {
@@ -50,7 +52,26 @@ TraceScene build_trace_scene(const Scene& scene, TraceSceneBuildInfo* info) {
     out.solids.push_back({cyl, trace_material(scene, c.material, c.field)});
     ++counts.cylinders;
   }
-  counts.skipped_rectangles = static_cast<int>(scene.rectangles.size());
+  for (const RectangleSolid& r : scene.rectangles) {
+    TraceMaterial material = TraceMaterial::opaque(1.0);
+    if (!r.material.empty()) {
+      const Material m = scene.material(r.material, r.field + ".material");
+      if (m.kind != MaterialKind::opaque)
+        throw InputError(scene.source, r.field + ".material",
+                         "a rectangle has no thickness, so it must be opaque (got '" + r.material + "')");
+      material = TraceMaterial::opaque(m.albedo.value_or(1.0));
+    }
+    Rectangle rect;
+    rect.centre_mm = r.centre_mm;
+    rect.up = r.up.normalized();
+    rect.right = rect.up.cross(r.normal.normalized()).normalized();
+    rect.up = r.normal.normalized().cross(rect.right);  // exactly orthonormal
+    rect.half_width_mm = 0.5 * r.size_mm[0];
+    rect.half_height_mm = 0.5 * r.size_mm[1];
+    counts.rectangle_solids.push_back(static_cast<int>(out.solids.size()));
+    out.solids.push_back({rect, material});
+    ++counts.rectangles;
+  }
 
   const Sheet& sh = *scene.sheet;
   out.sheet.origin_mm = sh.origin_mm;

@@ -7,14 +7,17 @@
 //   (as boxes) and cylinders become TraceSolids in that order; glass takes the
 //   material's absolute refractive index at scene.wavelength_nm and its
 //   absorption (0 when not modelled); opaque materials become opaque solids.
-// - Rectangles (targets, textured backdrops) are NOT converted: the tracer has
-//   no zero-thickness textured surface yet. build_trace_scene counts them in
-//   TraceSceneBuildInfo::skipped_rectangles so callers can warn.
+// - Rectangles (targets, markers, backdrops) become opaque Rectangle solids
+//   with their material's albedo (white, albedo 1, without one); glass
+//   rectangles are refused (a zero-thickness surface has no inside).
+//   TraceSceneBuildInfo::rectangle_solids lists their solid indices, in the
+//   scene's order, so a renderer can find each one's texture.
 // - The fluid index is the fluid material's absolute index at the wavelength.
 // - The sheet becomes the SheetPlane (origin, axes, extent). A scene without a
 //   sheet throws std::invalid_argument (nothing to map onto).
 #include <Eigen/Core>
 #include <optional>
+#include <vector>
 
 #include "calib/camera_model.h"
 #include "calib/rigid_transform.h"
@@ -24,8 +27,8 @@
 namespace glasspiv {
 
 struct TraceSceneBuildInfo {
-  int spheres = 0, boxes = 0, slabs = 0, cylinders = 0;
-  int skipped_rectangles = 0;
+  int spheres = 0, boxes = 0, slabs = 0, cylinders = 0, rectangles = 0;
+  std::vector<int> rectangle_solids;  // solid index of scene.rectangles[i]
 };
 
 // Throws InputError (via Scene::material / Material::refractive_index) for an

@@ -1,12 +1,10 @@
 #include "render/transport_map.h"
 
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <limits>
 #include <stdexcept>
-#include <thread>
 
+#include "render/parallel_rows.h"
 #include "render/trace_scene_builder.h"
 
 namespace glasspiv {
@@ -89,35 +87,17 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
                                  int samples_per_axis, int threads, const std::function<void(int, int)>& progress) {
   if (samples_per_axis < 1) throw std::invalid_argument("build_transport_map: samples_per_axis must be >= 1");
   const int width = camera.width_px(), height = camera.height_px();
-  if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  threads = std::min(threads, height);
 
   const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
   std::vector<RowBuffer> rows(static_cast<std::size_t>(height));
-  std::atomic<int> next_row{0}, rows_done{0};
-  auto worker = [&]() {
-    for (int row = next_row.fetch_add(1); row < height; row = next_row.fetch_add(1)) {
-      trace_row(scene, *index, camera, camera_from_world, options, samples_per_axis, row,
-                &rows[static_cast<std::size_t>(row)]);
-      rows_done.fetch_add(1);
-    }
-  };
-  // An exception in a worker would terminate; trace_ray throws only for
-  // non-finite rays, which pixel_camera_ray never produces. The calling thread
-  // reports progress while the pool works.
-  std::vector<std::thread> pool;
-  pool.reserve(static_cast<std::size_t>(threads));
-  for (int i = 0; i < threads; ++i) pool.emplace_back(worker);
-  if (progress) {
-    int reported = -1;
-    while (true) {
-      const int done = rows_done.load();
-      if (done != reported) progress(reported = done, height);
-      if (done >= height) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-  }
-  for (std::thread& th : pool) th.join();
+  // trace_ray throws only for non-finite rays, which pixel_camera_ray never produces.
+  threads = parallel_rows(
+      height, threads,
+      [&](int row) {
+        trace_row(scene, *index, camera, camera_from_world, options, samples_per_axis, row,
+                  &rows[static_cast<std::size_t>(row)]);
+      },
+      progress);
 
   TransportMap map;
   map.width = width;

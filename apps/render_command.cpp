@@ -1,0 +1,195 @@
+// glasspiv render: the image a scene camera records of a textured light sheet
+// (through the transport map, cached on request), or the setup itself.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "apps/cli_files.h"
+#include "apps/commands.h"
+#include "apps/render_scene.h"
+#include "render/forward_render.h"
+#include "render/setup_render.h"
+#include "render/sheet_pattern.h"
+#include "render/transport_map_file.h"
+#include "util/image_file.h"
+#include "util/input_error.h"
+#include "util/progress_bar.h"
+
+namespace glasspiv {
+namespace {
+
+struct RenderOptions {
+  std::string scene, camera, output, sheet_texture, pattern, map, format;
+  bool setup = false, no_reflections = false;
+  double background = -1, texture_mm_per_px = 0, pattern_mm = 10, particle_density = 2, particle_diameter_mm = 0.2, gain = 1;
+  double min_weight = TraceOptions{}.min_weight;
+  int max_depth = TraceOptions{}.max_depth, samples = 0, threads = 0;
+  std::uint64_t seed = 1;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The picture on the sheet: an image file, or a built-in pattern over the sheet's extent.
+SheetTexture sheet_picture(const RenderOptions& o, const SheetPlane& sheet) {
+  if (!o.sheet_texture.empty()) {
+    const GrayImage img = read_gray_image(o.sheet_texture);
+    // Default: as large as fits the sheet's extent, centred.
+    const double mm = o.texture_mm_per_px > 0 ? o.texture_mm_per_px
+                                              : std::max(sheet.extent_s_mm / img.width, sheet.extent_t_mm / img.height);
+    return SheetTexture(img.values.data(), img.height, img.width, mm);
+  }
+  SheetPicture p;
+  if (o.pattern == "checker") {
+    p = checkerboard_picture(sheet.extent_s_mm, sheet.extent_t_mm, o.pattern_mm);
+  } else if (o.pattern == "grid") {
+    p = grid_picture(sheet.extent_s_mm, sheet.extent_t_mm, o.pattern_mm, o.pattern_mm / 10, o.pattern_mm / 20);
+  } else {
+    p = particle_picture(sheet.extent_s_mm, sheet.extent_t_mm, o.particle_density, o.particle_diameter_mm,
+                         o.particle_diameter_mm / 4, o.seed);
+  }
+  return SheetTexture(p.values.data(), p.rows, p.cols, p.mm_per_texel);
+}
+
+std::function<void(int, int)> progress_of(ProgressBar* bar) {
+  return [bar, last = 0](int done, int) mutable {
+    bar->advance(static_cast<std::size_t>(done - last));
+    last = done;
+  };
+}
+
+void run_render(const RenderOptions& o) {
+  const int sources = !o.sheet_texture.empty() + !o.pattern.empty() + o.setup;
+  if (sources != 1)
+    throw InputError("", "--sheet-texture", "give exactly one of --sheet-texture IMG, --sheet-pattern NAME, --setup");
+  const std::string ext = lower_extension(o.output);
+  if (ext != ".tif" && ext != ".tiff" && ext != ".png" && ext != ".exr")
+    throw InputError(o.output, "-o", "must end in .tif, .tiff, .png or .exr");
+  const PixelFormat format = !o.format.empty() ? pixel_format_from_name(o.format, "--format")
+                                               : (ext == ".exr" ? PixelFormat::float32 : PixelFormat::uint16);
+  check_not_input(o.scene, o.output);
+  if (!o.sheet_texture.empty()) check_not_input(o.sheet_texture, o.output);
+  if (!o.map.empty()) check_not_input(o.scene, o.map);
+
+  const PreparedScene ps = prepare_scene(o.scene, o.camera);
+  TraceOptions options;
+  options.min_weight = o.min_weight;
+  options.max_depth = o.max_depth;
+  options.reflections = !o.no_reflections;
+  const Camera& camera = ps.camera();
+  const RigidTransform& pose = *camera.camera_from_world;
+  std::printf("scene %s: %zu solids; camera '%s' %dx%d\n", o.scene.c_str(), ps.trace.solids.size(),
+              ps.camera_name().c_str(), camera.model.width_px(), camera.model.height_px());
+
+  std::vector<float> image;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (o.setup) {
+    const int samples = o.samples > 0 ? o.samples : 2;
+    const std::vector<const SheetTexture*> textures = ps.textures_by_solid();
+    SetupLook look;
+    look.background_radiance = o.background >= 0 ? o.background : ps.scene.background.radiance;
+    look.textures = textures;
+    SetupRenderStats stats;
+    {
+      ProgressBar bar("render setup", static_cast<std::size_t>(camera.model.height_px()));
+      image = render_setup(ps.trace, look, camera.model, pose, options, samples, o.threads, progress_of(&bar), &stats);
+    }
+    std::printf("traced the setup: %ld camera rays (%d x %d per pixel), %.1f branches per ray, %ld rays met no "
+                "solid (closed form), %.2f s on %d threads\n",
+                stats.camera_rays, samples, samples, double(stats.branches_traced) / std::max(1L, stats.camera_rays),
+                stats.closed_form_rays, seconds_since(t0), stats.threads);
+  } else {
+    const int samples = o.samples > 0 ? o.samples : 1;
+    const std::uint64_t fingerprint = transport_map_fingerprint(ps.trace, camera.model, pose, options, samples);
+    std::optional<TransportMap> map;
+    if (!o.map.empty()) {
+      std::string why;
+      map = load_cached_transport_map(o.map, fingerprint, &why);
+      if (map)
+        std::printf("reused the transport map %s (fingerprint %s): nothing re-traced\n", o.map.c_str(),
+                    fingerprint_hex(fingerprint).c_str());
+      else
+        std::printf("tracing a new transport map (cache %s: %s)\n", o.map.c_str(), why.c_str());
+    }
+    if (!map) {
+      ProgressBar bar("trace map", static_cast<std::size_t>(camera.model.height_px()));
+      map = build_transport_map(ps.trace, camera.model, pose, options, samples, o.threads, progress_of(&bar));
+      bar.finish();
+      const TransportStats& st = map->stats;
+      std::printf("traced: %ld camera rays, %ld branches (%.1f per ray), %zu sheet crossings (%.2f per pixel), "
+                  "%.2f s on %d threads\n",
+                  st.camera_rays, st.branches_traced, double(st.branches_traced) / std::max(1L, st.camera_rays),
+                  map->crossing_count(), double(map->crossing_count()) / map->pixel_count(), seconds_since(t0),
+                  st.threads);
+      std::printf("skipped: %ld rays met no solid (closed form), %ld branches below min_weight, %ld beyond max_depth, "
+                  "%ld reflections not spawned; weight not followed %.3g of a pixel on average\n",
+                  st.closed_form_rays, st.branches_cut_by_weight, st.branches_cut_by_depth, st.reflections_skipped,
+                  st.cut_weight / map->pixel_count());
+      if (map->crossing_count() == 0)
+        throw InputError(o.scene, ps.camera_field(),
+                         fmt::format("camera '{}' sees none of the sheet: check its pose and the sheet's extent",
+                                     ps.camera_name()));
+      if (!o.map.empty()) {
+        write_transport_map(o.map, *map, fingerprint);
+        std::printf("wrote the transport map %s (%.1f MiB, fingerprint %s)\n", o.map.c_str(),
+                    map->memory_bytes() / 1048576.0, fingerprint_hex(fingerprint).c_str());
+      }
+    }
+    const SheetTexture texture = sheet_picture(o, ps.trace.sheet);
+    image = forward_render_values(*map, texture, o.background >= 0 ? o.background : ps.scene.background.radiance);
+  }
+  if (o.gain != 1)
+    for (float& v : image) v = static_cast<float>(v * o.gain);
+  write_gray_image(o.output, image.data(), camera.model.width_px(), camera.model.height_px(), format);
+  std::printf("wrote %s (%dx%d, %s)\n", o.output.c_str(), camera.model.width_px(), camera.model.height_px(),
+              pixel_format_name(format));
+}
+
+}  // namespace
+
+void register_render_command(CLI::App& app) {
+  auto o = std::make_shared<RenderOptions>();
+  CLI::App* r = app.add_subcommand(
+      "render", "Render what a scene camera records: a textured light sheet through the glass, or the setup itself");
+  r->add_option("scene", o->scene, "Scene file (docs/scene.md)")->required()->check(CLI::ExistingFile);
+  r->add_option("-o,--output", o->output, "Image to write: .tif, .png or .exr")->required();
+  r->add_option("--camera", o->camera, "Camera name in the scene (default: the first)");
+  r->add_option("--sheet-texture", o->sheet_texture, "Image laid on the sheet (TIFF, PNG, EXR, ...)")
+      ->check(CLI::ExistingFile);
+  r->add_option("--texture-mm-per-px", o->texture_mm_per_px,
+                "Size of one texture pixel on the sheet (default: the image fits the sheet's extent)")
+      ->check(CLI::PositiveNumber);
+  r->add_option("--sheet-pattern", o->pattern, "Built-in picture on the sheet instead of an image")
+      ->check(CLI::IsMember({"checker", "grid", "particles"}));
+  r->add_option("--pattern-mm", o->pattern_mm, "Checker square or grid pitch in mm (default 10)")
+      ->check(CLI::PositiveNumber);
+  r->add_option("--particle-density", o->particle_density, "Particles per mm^2 of sheet (default 2)")
+      ->check(CLI::NonNegativeNumber);
+  r->add_option("--particle-diameter-mm", o->particle_diameter_mm, "Particle image diameter at 1/e^2 (default 0.2)")
+      ->check(CLI::PositiveNumber);
+  r->add_option("--seed", o->seed, "Seed of the particle field (default 1)");
+  r->add_flag("--setup", o->setup, "Render the setup itself (glass, opaque parts, targets, background)");
+  r->add_option("--map", o->map,
+                "Transport map cache: reused when it was made for this exact scene, camera and settings; "
+                "otherwise traced and written there");
+  r->add_option("--samples", o->samples, "Samples per pixel axis (default 1; 2 with --setup)")
+      ->check(CLI::Range(1, 16));
+  r->add_option("--min-weight", o->min_weight, "Branches below this weight are not followed")
+      ->check(CLI::Range(0.0, 1.0));
+  r->add_option("--max-depth", o->max_depth, "Most interface events on one path")->check(CLI::Range(1, 1000));
+  r->add_flag("--no-reflections", o->no_reflections, "Follow refracted branches only (no ghost images)");
+  r->add_option("--background", o->background,
+                "Radiance of what lies beyond the scene (default: the scene's background.radiance; "
+                "1 makes glass edges visible in --setup)")
+      ->check(CLI::NonNegativeNumber);
+  r->add_option("--gain", o->gain, "Multiply the radiance before writing (integer formats clip at 1)");
+  r->add_option("--format", o->format, "8, 16 or float (default 16; float for .exr)");
+  r->add_option("--threads", o->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  r->callback([o]() { run_render(*o); });
+}
+
+}  // namespace glasspiv

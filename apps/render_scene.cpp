@@ -1,0 +1,48 @@
+#include "apps/render_scene.h"
+
+#include <fmt/format.h>
+
+#include "render/scene_yaml.h"
+#include "util/image_file.h"
+#include "util/input_error.h"
+
+namespace glasspiv {
+
+std::vector<const SheetTexture*> PreparedScene::textures_by_solid() const {
+  std::vector<const SheetTexture*> out(trace.solids.size(), nullptr);
+  for (std::size_t i = 0; i < rectangle_textures.size(); ++i)
+    out[static_cast<std::size_t>(info.rectangle_solids[i])] = rectangle_textures[i].get();
+  return out;
+}
+
+PreparedScene prepare_scene(const std::string& path, const std::string& camera_name) {
+  PreparedScene ps;
+  ps.scene = read_scene(path);
+  if (!ps.scene.sheet) throw InputError(path, "sheet", "the scene has no sheet to render");
+  if (ps.scene.cameras.empty()) throw InputError(path, "cameras", "the scene has no camera");
+  if (!camera_name.empty()) {
+    ps.camera_index = -1;
+    std::string names;
+    for (std::size_t i = 0; i < ps.scene.cameras.size(); ++i) {
+      if (ps.scene.cameras[i].name == camera_name) ps.camera_index = static_cast<int>(i);
+      names += (i ? ", " : "") + ps.scene.cameras[i].name;
+    }
+    if (ps.camera_index < 0)
+      throw InputError(path, "--camera", fmt::format("no camera '{}' in the scene (it has: {})", camera_name, names));
+  }
+  ps.trace = build_trace_scene(ps.scene, &ps.info);
+  for (const RectangleSolid& r : ps.scene.rectangles) {
+    if (r.texture.empty()) {
+      ps.rectangle_textures.emplace_back();
+      continue;
+    }
+    const GrayImage img = read_gray_image(r.texture);
+    // The picture fills the rectangle's width and is centred (a different
+    // aspect ratio leaves bands or is cut at the top and bottom).
+    ps.rectangle_textures.push_back(
+        std::make_unique<SheetTexture>(img.values.data(), img.height, img.width, r.size_mm[0] / img.width));
+  }
+  return ps;
+}
+
+}  // namespace glasspiv
