@@ -39,7 +39,7 @@ cams="$src/data/cameras"
 
 # --help on every command.
 for cmd in "" "camera" "camera convert" "camera show" "camera compare" "demo" "calib" "calib detect" \
-  "calib intrinsics" "calib report" "target" "target print" "target show"; do
+  "calib intrinsics" "calib report" "target" "target print" "target show" "render"; do
   # shellcheck disable=SC2086
   "$glasspiv" $cmd --help >"$work/out" 2>&1 && grep -q "Usage" "$work/out" && ok || fail "glasspiv $cmd --help"
 done
@@ -101,6 +101,44 @@ expect_error 2 "--target" -- "$glasspiv" calib intrinsics "$left" -o "$work/x.ya
 printf 'not an image' >"$work/fake.png"
 expect_error 2 "fake.png" -- "$glasspiv" calib intrinsics "$work/fake.png" --target "$left/target.yaml" -o "$work/x.yaml"
 [ ! -e "$work/x.yaml" ] && ok || fail "a failed calibration wrote a camera file"
+
+# Render: a small ball-lens scene (inline 160 x 120 camera), textured sheet,
+# the transport map cache, the setup, and bad input.
+cat >"$work/lens.yaml" <<'YAML'
+glasspiv_scene: 1
+fluid: air
+solids:
+  - {type: sphere, centre_mm: [0, 0, 0], diameter_mm: 40, material: N-BK7}
+  - {type: rectangle, centre_mm: [0, 0, 120], size_mm: [200, 200], normal: [0, 0, -1], up: [0, 1, 0], material: grey}
+materials:
+  grey: {opaque: 0.5}
+sheet: {origin_mm: [0, 0, 40], s_axis: [-1, 0, 0], t_axis: [0, 1, 0], extent_mm: [100, 100], thickness_mm: 1}
+background: {radiance: 0}
+cameras:
+  - name: small
+    model: {image_size_px: [160, 120], lens_model: pinhole, focal_length_px: [400, 400], principal_point_px: [79.5, 59.5]}
+    pose: {position_mm: [0, 0, -500], look_at_mm: [0, 0, 40], up: [0, 1, 0]}
+YAML
+expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/lens.tif" --map "$work/lens.tmap"
+[ -s "$work/lens.tif" ] && [ -s "$work/lens.tmap" ] && ok || fail "render wrote no image or map"
+grep -q "tracing a new transport map" "$work/out" && ok || fail "first render did not trace: $(cat "$work/out")"
+expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-texture "$work/lens.tif" -o "$work/lens2.exr" --map "$work/lens.tmap"
+grep -q "nothing re-traced" "$work/out" && ok || fail "second render re-traced: $(cat "$work/out")"
+expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern particles -o "$work/lens3.png" --map "$work/lens.tmap" --no-reflections
+grep -q "another setup" "$work/out" && ok || fail "changed settings reused the map: $(cat "$work/out")"
+expect_ok "$glasspiv" render "$work/lens.yaml" --setup -o "$work/setup.png" --format 8 --background 1
+[ -s "$work/setup.png" ] && ok || fail "render --setup wrote nothing"
+expect_error 2 "exactly one" -- "$glasspiv" render "$work/lens.yaml" -o "$work/x.tif"
+expect_error 2 "x.jpg" "-o" -- "$glasspiv" render "$work/lens.yaml" --setup -o "$work/x.jpg"
+expect_error 2 "lens.yaml" "--camera" "small" -- "$glasspiv" render "$work/lens.yaml" --setup --camera nope -o "$work/x.tif"
+sed 's/look_at_mm: \[0, 0, 40\]/look_at_mm: [0, 0, -1000]/' "$work/lens.yaml" >"$work/away.yaml"
+expect_error 2 "away.yaml" "sees none of the sheet" -- "$glasspiv" render "$work/away.yaml" --sheet-pattern grid -o "$work/x.tif"
+sed 's/diameter_mm: 40/diameter_mm: -40/' "$work/lens.yaml" >"$work/neg.yaml"
+expect_error 2 "neg.yaml" "diameter_mm" -- "$glasspiv" render "$work/neg.yaml" --setup -o "$work/x.tif"
+sed 's/material: grey}/material: N-BK7}/' "$work/lens.yaml" >"$work/glassrect.yaml"
+expect_error 2 "glassrect.yaml" "opaque" -- "$glasspiv" render "$work/glassrect.yaml" --setup -o "$work/x.tif"
+expect_error 2 "lens.tif" "input" -- "$glasspiv" render "$work/lens.yaml" --sheet-texture "$work/lens.tif" -o "$work/lens.tif"
+[ ! -e "$work/x.tif" ] && ok || fail "a failed render wrote an image"
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
