@@ -153,6 +153,18 @@ void validate(const Scene& scene) {
     if (!r.material.empty() && c.material(r.material, r.field + ".material").kind != MaterialKind::opaque)
       c.fail(r.field + ".material", "a rectangle is a thin opaque surface; '" + r.material + "' is not opaque");
   }
+  for (const MeshSolid& m : scene.meshes) {
+    if (m.file.empty()) c.fail(m.field + ".file", "must name a mesh file");
+    c.positive(m.placement.scale, m.field + ".scale");
+    c.finite(m.placement.position_mm, m.field + ".position_mm");
+    const Eigen::Matrix3d& r = m.placement.world_from_mesh;
+    if (!r.allFinite() || !(r.transpose() * r).isIdentity(1e-9) || r.determinant() < 0)
+      c.fail(m.field + ".rotation_deg", "must be a rotation");
+    const double crease = m.options.crease_angle_deg;
+    if (!(crease > 0 && crease <= 180))
+      c.fail(m.field + ".crease_angle_deg", fmt::format("must lie in (0, 180] degrees, got {}", crease));
+    c.material(m.material, m.field + ".material");
+  }
   for (const Packing& p : scene.packings) {
     c.positive(p.diameter_mm, p.field + ".diameter_mm");
     c.finite(p.origin_mm, p.field + ".origin_mm");

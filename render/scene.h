@@ -14,6 +14,7 @@
 
 #include "calib/camera.h"
 #include "render/material.h"
+#include "render/mesh_file.h"
 
 namespace glasspiv {
 
@@ -70,6 +71,17 @@ struct RectangleSolid {
   Eigen::Vector3d up = Eigen::Vector3d::UnitY();
   std::string texture;   // image path as resolved by the reader ("" = none)
   std::string material;  // "" = opaque white (albedo 1) under the texture
+  std::string field;
+};
+
+// A triangle-mesh solid from a CAD file (STL, OBJ, PLY). The scene only
+// describes it; render/mesh_file.h load_scene_mesh reads the file (which must
+// hold a closed mesh). p_world = world_from_mesh (scale p_file) + position_mm.
+struct MeshSolid {
+  std::string file;         // the mesh file as resolved by the reader
+  MeshPlacement placement;  // scale (file units -> mm), rotation, position
+  MeshLoadOptions options;  // normals (flat, smooth, file) and the crease angle of smooth ones
+  std::string material;
   std::string field;
 };
 
@@ -140,6 +152,7 @@ struct Scene {
   std::vector<SlabSolid> slabs;
   std::vector<CylinderSolid> cylinders;
   std::vector<RectangleSolid> rectangles;
+  std::vector<MeshSolid> meshes;  // from `meshes:` and `solids: - type: mesh`, in file order within each
   std::vector<Packing> packings;
   std::optional<Sheet> sheet;
   Background background;
@@ -156,7 +169,9 @@ struct Scene {
 // problem) at the first fault: positive sizes, unit and non-zero axes, orthonormal
 // sheet axes, known materials (fluid not opaque), refractive indices defined at the
 // wavelength, packing overrides that select something, no two spheres overlapping by
-// more than 1e-6 mm (touching is fine), unique camera names, cameras with a pose.
+// more than 1e-6 mm (touching is fine), unique camera names, cameras with a pose,
+// meshes with a file name, a positive scale and a rotation (their files are not
+// read here: load_scene_mesh does that).
 void validate(const Scene& scene);
 
 // Tolerances of the axes: a direction whose length is within kAxisLengthTolerance

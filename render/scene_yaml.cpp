@@ -20,8 +20,10 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::vector<std::string> kTopLevel = {"glasspiv_scene", "wavelength_nm", "fluid",      "materials",
-                                            "solids",         "packings",      "sheet",      "background",
-                                            "cameras"};
+                                            "solids",         "meshes",        "packings",   "sheet",
+                                            "background",     "cameras"};
+const std::vector<std::string> kMeshKeys = {"file",         "material", "scale", "position_mm", "rotation_deg",
+                                            "normals",      "crease_angle_deg"};
 
 std::string join(const std::vector<std::string>& keys) {
   std::string out;
@@ -67,8 +69,6 @@ class Map {
     for (auto it = node.begin(); it != node.end(); ++it) {
       const std::string key = it->first.IsScalar() ? it->first.Scalar() : std::string("?");
       const std::string path = child(field_, key);
-      if (key == "mesh" || key == "meshes")
-        r.fail(path, it->first, "meshes are not supported yet (spheres, boxes, slabs, cylinders, rectangles and packings are)");
       bool known = false;
       for (const std::string& a : allowed) known = known || a == key;
       if (!known) r.fail(path, it->first, "unknown key '" + key + "' (expected one of: " + join(allowed) + ")");
@@ -162,14 +162,40 @@ Eigen::Matrix3d read_rotation(Reader& r, const YAML::Node& node, const std::stri
   return rotation_from_euler_deg(m.vec3("euler_deg"));
 }
 
+// A mesh entry (of `meshes`, or a solid of type mesh with `type` among `keys`).
+MeshSolid read_mesh(Reader& r, const YAML::Node& node, const std::string& field, const std::vector<std::string>& keys) {
+  const Map m(r, node, field, keys);
+  MeshSolid mesh;
+  mesh.field = field;
+  const std::string name = m.text("file");
+  mesh.file = resolve(r.path(), name);
+  if (!fs::exists(mesh.file))
+    r.fail(m.path("file"), m.required("file"),
+           "mesh file '" + name + "' does not exist (resolved to '" + mesh.file + "')");
+  mesh.placement.scale = m.real_or("scale", 1);
+  if (m.has("position_mm")) mesh.placement.position_mm = m.vec3("position_mm");
+  if (m.has("rotation_deg")) mesh.placement.world_from_mesh = rotation_from_rvec_deg(m.vec3("rotation_deg"));
+  if (m.has("normals")) {
+    const std::string normals = m.text("normals");
+    const auto n = mesh_normals_from_name(normals);
+    if (!n) r.fail(m.path("normals"), m.required("normals"), "unknown normals '" + normals + "' (flat, smooth or file)");
+    mesh.options.normals = *n;
+  }
+  mesh.options.crease_angle_deg = m.real_or("crease_angle_deg", mesh.options.crease_angle_deg);
+  mesh.material = m.text("material");
+  return mesh;
+}
+
 void read_solid(Reader& r, const YAML::Node& node, const std::string& field, Scene& scene) {
   if (!node.IsMap()) r.fail(field, node, "must be a mapping with a 'type'");
   const YAML::Node type_node = node["type"];
-  if (!type_node) r.fail(field + ".type", node, "missing (required: sphere, box, slab, cylinder or rectangle)");
+  if (!type_node) r.fail(field + ".type", node, "missing (required: sphere, box, slab, cylinder, rectangle or mesh)");
   const std::string type = r.text(type_node, field + ".type");
-  if (type == "mesh")
-    r.fail(field + ".type", type_node, "meshes are not supported yet (sphere, box, slab, cylinder, rectangle are)");
-  if (type == "sphere") {
+  if (type == "mesh") {
+    std::vector<std::string> keys{"type"};
+    keys.insert(keys.end(), kMeshKeys.begin(), kMeshKeys.end());
+    scene.meshes.push_back(read_mesh(r, node, field, keys));
+  } else if (type == "sphere") {
     const Map m(r, node, field, {"type", "centre_mm", "diameter_mm", "material"});
     scene.spheres.push_back({m.vec3("centre_mm"), m.real("diameter_mm"), m.text("material"), field});
   } else if (type == "box") {
@@ -216,7 +242,8 @@ void read_solid(Reader& r, const YAML::Node& node, const std::string& field, Sce
     rect.field = field;
     scene.rectangles.push_back(rect);
   } else {
-    r.fail(field + ".type", type_node, "unknown solid type '" + type + "' (sphere, box, slab, cylinder, rectangle)");
+    r.fail(field + ".type", type_node,
+           "unknown solid type '" + type + "' (sphere, box, slab, cylinder, rectangle, mesh)");
   }
 }
 
@@ -338,6 +365,9 @@ Scene parse(std::string_view contents, const std::string& path) {
   };
   if (const auto solids = list("solids"))
     for (std::size_t k = 0; k < solids->size(); ++k) read_solid(r, (*solids)[k], fmt::format("solids[{}]", k), scene);
+  if (const auto meshes = list("meshes"))
+    for (std::size_t k = 0; k < meshes->size(); ++k)
+      scene.meshes.push_back(read_mesh(r, (*meshes)[k], fmt::format("meshes[{}]", k), kMeshKeys));
   if (const auto packings = list("packings"))
     for (std::size_t k = 0; k < packings->size(); ++k)
       scene.packings.push_back(read_packing(r, (*packings)[k], fmt::format("packings[{}]", k)));
@@ -471,6 +501,19 @@ std::string format_scene(const Scene& scene, const std::string& path) {
     if (!r.texture.empty()) n["texture"] = relative(r.texture);
     if (!r.material.empty()) n["material"] = r.material;
     root["solids"].push_back(n);
+  }
+  for (const MeshSolid& m : scene.meshes) {
+    YAML::Node n;
+    n["file"] = relative(m.file);
+    n["material"] = m.material;
+    n["scale"] = m.placement.scale;
+    n["position_mm"] = vec(m.placement.position_mm);
+    const Eigen::AngleAxisd aa(m.placement.world_from_mesh);
+    if (aa.angle() != 0) n["rotation_deg"] = vec(Eigen::Vector3d(aa.axis() * aa.angle() * 180 / M_PI));
+    n["normals"] = mesh_normals_name(m.options.normals);
+    if (m.options.crease_angle_deg != MeshLoadOptions{}.crease_angle_deg)
+      n["crease_angle_deg"] = m.options.crease_angle_deg;
+    root["meshes"].push_back(n);
   }
   for (const Packing& p : scene.packings) {
     YAML::Node n;

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "render/mesh_file.h"
 #include "render/packing.h"
 #include "render/scene.h"
 #include "render/scene_yaml.h"
@@ -328,8 +329,8 @@ TEST_F(SceneText, ValidationErrorsNameFileFieldAndLine) {
   expect_error("colour: red\n", "colour", "unknown key 'colour'");
   expect_error("sheet: {origin_mm: [0, 0, 0], s_axis: [1, 0, 0], t_axis: [0, 1, 0], extent_mm: [1, 1], thickness_mm: 1, tilt: 3}\n",
                "sheet.tilt", "unknown key");
-  expect_error("solids:\n  - {type: mesh, file: bunny.stl, material: N-BK7}\n", "solids[0].type", "not supported yet");
-  expect_error("meshes: []\n", "meshes", "not supported yet");
+  expect_error("solids:\n  - {type: mesh, file: bunny.stl, material: N-BK7}\n", "solids[0].file", "does not exist");
+  expect_error("meshes: {file: bunny.stl}\n", "meshes", "must be a list");
   expect_error("solids:\n  - {type: torus}\n", "solids[0].type", "unknown solid type");
   expect_error(std::string(kSphere) + "  - {type: sphere, centre_mm: [30, 0, 0], diameter_mm: 40, material: N-BK7}\n",
                "solids[1]", "overlaps solids[0]");
@@ -396,7 +397,7 @@ TEST(SceneSchema, ValidJsonListingTheReadersTopLevelKeys) {
             schema.at("required").end());
   // Every solid type the reader accepts has a branch in the schema.
   const std::string text = schema.dump();
-  for (const char* type : {"sphere", "box", "slab", "cylinder", "rectangle"})
+  for (const char* type : {"sphere", "box", "slab", "cylinder", "rectangle", "mesh"})
     EXPECT_NE(text.find(std::string("\"") + type + "\""), std::string::npos) << type;
 }
 
@@ -428,6 +429,16 @@ void expect_same(const Scene& a, const Scene& b) {
   ASSERT_EQ(a.slabs.size(), b.slabs.size());
   ASSERT_EQ(a.cylinders.size(), b.cylinders.size());
   ASSERT_EQ(a.rectangles.size(), b.rectangles.size());
+  ASSERT_EQ(a.meshes.size(), b.meshes.size());
+  for (std::size_t k = 0; k < a.meshes.size(); ++k) {
+    EXPECT_TRUE(fs::equivalent(a.meshes[k].file, b.meshes[k].file));
+    EXPECT_EQ(a.meshes[k].placement.scale, b.meshes[k].placement.scale);
+    EXPECT_EQ(a.meshes[k].placement.position_mm, b.meshes[k].placement.position_mm);
+    EXPECT_TRUE(a.meshes[k].placement.world_from_mesh.isApprox(b.meshes[k].placement.world_from_mesh, 1e-14));
+    EXPECT_EQ(a.meshes[k].options.normals, b.meshes[k].options.normals);
+    EXPECT_EQ(a.meshes[k].options.crease_angle_deg, b.meshes[k].options.crease_angle_deg);
+    EXPECT_EQ(a.meshes[k].material, b.meshes[k].material);
+  }
   ASSERT_EQ(a.sheet.has_value(), b.sheet.has_value());
   if (a.sheet) {
     EXPECT_EQ(a.sheet->origin_mm, b.sheet->origin_mm);
@@ -478,6 +489,95 @@ TEST_F(SceneText, EverySolidKindRoundTrips) {
   expect_same(s, back);
   EXPECT_TRUE(fs::equivalent(back.rectangles[0].texture, dir_ / "dots.png"));
   EXPECT_EQ(back.cameras[0].file, "");
+}
+
+// A closed tetrahedron in ASCII STL (file units).
+const char* kTetrahedronStl =
+    "solid t\n"
+    "facet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0 1 0\nvertex 1 0 0\nendloop\nendfacet\n"
+    "facet normal 0 -1 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 0 1\nendloop\nendfacet\n"
+    "facet normal -1 0 0\nouter loop\nvertex 0 0 0\nvertex 0 0 1\nvertex 0 1 0\nendloop\nendfacet\n"
+    "facet normal 1 1 1\nouter loop\nvertex 1 0 0\nvertex 0 1 0\nvertex 0 0 1\nendloop\nendfacet\n"
+    "endsolid t\n";
+
+TEST_F(SceneText, MeshesFromTheListAndAsSolids) {
+  fs::create_directories(dir_ / "parts");
+  std::ofstream(dir_ / "parts" / "tet.stl") << kTetrahedronStl;
+  const Scene s = load(
+      "materials:\n  glass: BK7\n"
+      "solids:\n"
+      "  - {type: mesh, file: parts/tet.stl, material: glass}\n"
+      "meshes:\n"
+      "  - file: parts/tet.stl\n"
+      "    material: PMMA\n"
+      "    scale: 1000\n"
+      "    position_mm: [10, 20, 30]\n"
+      "    rotation_deg: [0, 0, 90]\n"
+      "    normals: file\n"
+      "    crease_angle_deg: 30\n");
+  ASSERT_EQ(s.meshes.size(), 2u);
+  const MeshSolid& a = s.meshes[0];
+  EXPECT_EQ(a.field, "solids[0]");
+  EXPECT_TRUE(fs::equivalent(a.file, dir_ / "parts" / "tet.stl")) << "relative to the scene file";
+  EXPECT_EQ(a.placement.scale, 1);
+  EXPECT_EQ(a.placement.position_mm, Eigen::Vector3d::Zero());
+  EXPECT_EQ(a.placement.world_from_mesh, Eigen::Matrix3d::Identity());
+  EXPECT_EQ(a.options.normals, MeshNormals::smooth) << "the default";
+  EXPECT_EQ(a.options.crease_angle_deg, 60);
+  EXPECT_EQ(a.material, "glass");
+  const MeshSolid& b = s.meshes[1];
+  EXPECT_EQ(b.field, "meshes[0]");
+  EXPECT_EQ(b.placement.scale, 1000);
+  EXPECT_EQ(b.placement.position_mm, Eigen::Vector3d(10, 20, 30));
+  EXPECT_TRUE((b.placement.world_from_mesh * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY()));
+  EXPECT_EQ(b.options.normals, MeshNormals::file);
+  EXPECT_EQ(b.options.crease_angle_deg, 30);
+  EXPECT_EQ(b.material, "PMMA");
+  // The scene describes; load_scene_mesh reads: 1000^3 / 6 mm^3, placed.
+  const TriangleMesh m = load_scene_mesh(s, b);
+  EXPECT_NEAR(m.volume_mm3(), 1e9 / 6, 1e-3);
+  EXPECT_TRUE(bounds_mm(m).min().isApprox(Eigen::Vector3d(-990, 20, 30)));
+  // Round trip through the writer (file relative to the new file's folder).
+  fs::create_directories(dir_ / "out");
+  const std::string out = (dir_ / "out" / "copy.yaml").string();
+  write_scene(out, s);
+  const Scene back = read_scene(out);
+  ASSERT_EQ(back.meshes.size(), 2u);
+  EXPECT_EQ(back.meshes[0].field, "meshes[0]");
+  expect_same(s, back);
+}
+
+TEST_F(SceneText, MeshErrorsNameTheFieldPath) {
+  std::ofstream(dir_ / "tet.stl") << kTetrahedronStl;
+  std::ofstream(dir_ / "open.stl") << "solid t\nfacet normal 0 0 -1\nouter loop\nvertex 0 0 0\nvertex 0 1 0\n"
+                                      "vertex 1 0 0\nendloop\nendfacet\nendsolid t\n";
+  expect_error("meshes:\n  - {file: gone.stl, material: N-BK7}\n", "meshes[0].file", "does not exist");
+  expect_error("meshes:\n  - {file: tet.stl}\n", "meshes[0].material", "missing");
+  expect_error("meshes:\n  - {material: N-BK7}\n", "meshes[0].file", "missing");
+  expect_error("meshes:\n  - {file: tet.stl, material: N-BK7, scale: -2}\n", "meshes[0].scale", "must be positive");
+  expect_error("meshes:\n  - {file: tet.stl, material: N-BK7, scale: 0}\n", "meshes[0].scale", "must be positive");
+  expect_error("meshes:\n  - {file: tet.stl, material: N-BK7, normals: phong}\n", "meshes[0].normals", "unknown normals");
+  expect_error("meshes:\n  - {file: tet.stl, material: N-BK7, crease_angle_deg: 200}\n", "meshes[0].crease_angle_deg",
+               "(0, 180]");
+  expect_error("meshes:\n  - {file: tet.stl, material: unobtainium}\n", "meshes[0].material", "unknown material");
+  expect_error("meshes:\n  - {file: tet.stl, material: N-BK7, position_mm: [1, 2]}\n", "meshes[0].position_mm", "");
+  expect_error("meshes:\n  - {file: tet.stl, material: N-BK7, rotation: {rvec_deg: [0, 0, 1]}}\n", "meshes[0].rotation",
+               "unknown key 'rotation'");
+  expect_error("meshes:\n  - {type: mesh, file: tet.stl, material: N-BK7}\n", "meshes[0].type", "unknown key 'type'");
+  expect_error("solids:\n  - {type: mesh, file: tet.stl, material: N-BK7, colour: red}\n", "solids[0].colour",
+               "unknown key");
+  // A bad file is found when the mesh is loaded, named by the scene and the field.
+  const Scene s = load("meshes:\n  - {file: tet.stl, material: N-BK7}\n  - {file: open.stl, material: N-BK7}\n");
+  EXPECT_NO_THROW((void)load_scene_mesh(s, s.meshes[0]));
+  try {
+    (void)load_scene_mesh(s, s.meshes[1]);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), s.source);
+    EXPECT_EQ(e.field(), "meshes[1].file");
+    EXPECT_NE(e.problem().find("open.stl"), std::string::npos) << e.what();
+    EXPECT_NE(e.problem().find("open meshes are refused"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
