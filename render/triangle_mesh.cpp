@@ -717,8 +717,12 @@ const std::vector<MeshTriangle>& TriangleMesh::triangles() const {
   static const std::vector<MeshTriangle> none;
   return data_ ? data_->tri : none;
 }
-const Eigen::Vector3d& TriangleMesh::triangle_normal(std::size_t k) const { return data_->n.at(k); }
+const Eigen::Vector3d& TriangleMesh::triangle_normal(std::size_t k) const {
+  if (!data_) throw std::out_of_range("triangle_normal of an empty mesh");
+  return data_->n.at(k);
+}
 std::array<Eigen::Vector3d, 3> TriangleMesh::corner_normals(std::size_t k) const {
+  if (!data_) throw std::out_of_range("corner_normals of an empty mesh");
   if (data_->shading == MeshShading::smooth) return data_->corner.at(k);
   const Vector3d& n = data_->n.at(k);
   return {n, n, n};

@@ -81,7 +81,7 @@ class TriangleMesh {
   const std::vector<Eigen::Vector3d>& vertices_mm() const;
   const std::vector<MeshTriangle>& triangles() const;
   std::size_t triangle_count() const { return triangles().size(); }
-  // Outward unit normal of triangle k.
+  // Outward unit normal of triangle k (std::out_of_range for a bad k).
   const Eigen::Vector3d& triangle_normal(std::size_t k) const;
   // The unit shading normals of the corners of triangle k (smooth meshes; the
   // geometric normal three times for flat ones).

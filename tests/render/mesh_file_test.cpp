@@ -274,7 +274,9 @@ TEST_F(MeshFile, BadFilesAreInputErrorsNamingThePath) {
 
 TEST_F(MeshFile, AssimpPrintsNothing) {
   const std::string good = write("box.stl", ascii_stl(source()));
-  const std::string bad = write("bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 1 2\n");
+  // (Not a truncated ASCII facet: assimp 5.2's STL reader leaks ~2.5 kB on one,
+  // which would fail the sanitizer build; an empty solid fails its validation.)
+  const std::string bad = write("bad.stl", "solid x\nendsolid x\n");
   const std::string bad_obj = write("bad.obj", "v 1 2 3\nf 1 7 9\nusemtl nothing\nmtllib missing.mtl\n");
   ::testing::internal::CaptureStdout();
   ::testing::internal::CaptureStderr();
