@@ -189,9 +189,11 @@ TEST(SceneFiles, Reactor) {
   EXPECT_NEAR(min_distance(spheres), 40, 1e-9);
   // The first layer is centred on the axis.
   EXPECT_TRUE(packing_sphere_centre(p, 0, 1, 1).isZero(1e-12));
-  // The sheet lies behind two layers: between the centres of layers 1 and 2, halfway.
-  const double z1 = packing_sphere_centre(p, 1, 0, 0).z(), z2 = packing_sphere_centre(p, 2, 0, 0).z();
-  EXPECT_NEAR(scene.sheet->origin_mm.z(), (z1 + z2) / 2, 1e-9);
+  // The sheet lies behind two layers of the 3 x 3 layout: halfway between the
+  // centres of layers 2 and 4, through the centres of layer 3.
+  const double z2 = packing_sphere_centre(p, 2, 0, 0).z(), z4 = packing_sphere_centre(p, 4, 0, 0).z();
+  EXPECT_NEAR(scene.sheet->origin_mm.z(), (z2 + z4) / 2, 1e-9);
+  EXPECT_NEAR(scene.sheet->origin_mm.z(), packing_sphere_centre(p, 3, 0, 0).z(), 1e-9);
   EXPECT_NEAR(scene.sheet->normal().z(), -1, 1e-12);  // facing the camera
   EXPECT_NEAR(scene.sheet->sigma_mm(), 0.25, 1e-12);
   ASSERT_EQ(scene.cameras.size(), 1u);
