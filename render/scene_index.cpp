@@ -57,9 +57,7 @@ LinearSceneIndex::LinearSceneIndex(std::vector<Shape> shapes) : SceneIndex(shape
 
 std::optional<Hit> LinearSceneIndex::first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                                                double t_min) const {
-  std::optional<Hit> best;
-  for (std::size_t i = 0; i < shapes_.size(); ++i) keep_nearest(intersect(shapes_[i], o, d, t_min), static_cast<int>(i), &best);
-  return best;
+  return glasspiv::first_hit(shapes_, o, d, t_min);  // nearest, ties to the lower index
 }
 
 // ---------------------------------------------------------------------------

@@ -206,6 +206,7 @@ std::optional<Hit> first_hit(const std::vector<Shape>& shapes, const Eigen::Vect
 }
 
 Eigen::AlignedBox3d bounds_mm(const Shape& shape) {
+  if (const auto* m = std::get_if<TriangleMesh>(&shape)) return bounds_mm(*m);
   if (const auto* s = std::get_if<Sphere>(&shape))
     return {s->centre_mm.array() - s->radius_mm, s->centre_mm.array() + s->radius_mm};
   if (const auto* b = std::get_if<Box>(&shape)) {
@@ -225,6 +226,7 @@ Eigen::AlignedBox3d bounds_mm(const Shape& shape) {
 
 bool contains(const Shape& shape, const Eigen::Vector3d& p, double margin_mm) {
   if (std::holds_alternative<Rectangle>(shape)) return false;  // no inside
+  if (const auto* m = std::get_if<TriangleMesh>(&shape)) return contains(*m, p, margin_mm);
   if (const auto* s = std::get_if<Sphere>(&shape)) return (p - s->centre_mm).norm() < s->radius_mm - margin_mm;
   if (const auto* b = std::get_if<Box>(&shape)) {
     const Eigen::Vector3d lp = b->world_from_box.transpose() * (p - b->centre_mm);
@@ -240,6 +242,7 @@ double scale_mm(const Shape& shape) {
   if (const auto* s = std::get_if<Sphere>(&shape)) return inf_norm(s->centre_mm) + s->radius_mm;
   if (const auto* b = std::get_if<Box>(&shape)) return 2 * inf_norm(b->centre_mm) + b->half_extent_mm.minCoeff();
   if (const auto* r = std::get_if<Rectangle>(&shape)) return 2 * inf_norm(r->centre_mm);
+  if (const auto* m = std::get_if<TriangleMesh>(&shape)) return scale_mm(*m);
   const auto& c = std::get<Cylinder>(shape);
   return 2 * inf_norm(c.centre_mm) + c.radius_mm;
 }

@@ -19,22 +19,11 @@
 #include <variant>
 #include <vector>
 
+#include "render/hit.h"
+#include "render/triangle_mesh.h"
+
 namespace glasspiv {
 
-struct Hit {
-  double t = 0;                                       // ray parameter (mm, d is unit)
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();    // on the surface (mm)
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // outward unit normal
-  int shape_index = -1;                               // set by first_hit; -1 for a single shape
-  double error_mm = 0;                                // bound on |point - exact surface point| along normal
-  // The normal that refraction and reflection use where it differs from the
-  // geometric one (smooth meshes: interpolated vertex normals, outward, unit);
-  // empty for exact solids. The geometric normal alone decides entering/leaving.
-  std::optional<Eigen::Vector3d> shading_normal;
-  // d(normal)/d(point) along the surface (the shape operator; zero for planes):
-  // ray differentials use it to carry footprints through curved interfaces.
-  Eigen::Matrix3d dnormal_dpoint = Eigen::Matrix3d::Zero();
-};
 
 struct Sphere {
   Eigen::Vector3d centre_mm = Eigen::Vector3d::Zero();
@@ -72,7 +61,8 @@ struct Rectangle {
   Eigen::Vector3d normal() const { return right.cross(up); }
 };
 
-using Shape = std::variant<Sphere, Box, Cylinder, Rectangle>;
+// Triangle meshes (render/triangle_mesh.h) follow the same contract.
+using Shape = std::variant<Sphere, Box, Cylinder, Rectangle, TriangleMesh>;
 
 // A slab: a box of the given thickness along the unit normal through centre,
 // extending half_extent_mm either way in the plane.
@@ -102,9 +92,6 @@ bool contains(const Shape& s, const Eigen::Vector3d& p, double margin_mm = 0);
 // radius (cylinder), 2 |centre|_inf (rectangle).
 double scale_mm(const Shape& s);
 
-// Relative error bound for hit points and spawned origins: 64 ulp of the
-// magnitudes involved. Hit::error_mm = kHitRelativeError * (|p|_inf + scale).
-inline constexpr double kHitRelativeError = 64 * 2.220446049250313e-16;
 
 // Origin of the ray that continues from `hit` in `direction`: the hit point
 // moved by 2 * hit.error_mm along the normal, to the side direction travels to

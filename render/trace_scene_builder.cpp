@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "render/mesh_file.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
@@ -51,6 +52,10 @@ TraceScene build_trace_scene(const Scene& scene, TraceSceneBuildInfo* info) {
     cyl.half_length_mm = 0.5 * c.length_mm;
     out.solids.push_back({cyl, trace_material(scene, c.material, c.field)});
     ++counts.cylinders;
+  }
+  for (const MeshSolid& m : scene.meshes) {
+    out.solids.push_back({load_scene_mesh(scene, m), trace_material(scene, m.material, m.field)});
+    ++counts.meshes;
   }
   for (const RectangleSolid& r : scene.rectangles) {
     TraceMaterial material = TraceMaterial::opaque(1.0);

@@ -4,9 +4,11 @@
 // pixel. No I/O.
 //
 // - Spheres (explicit and every packing's, via Scene::all_spheres), boxes, slabs
-//   (as boxes) and cylinders become TraceSolids in that order; glass takes the
+//   (as boxes), cylinders, meshes and rectangles become TraceSolids in that order; glass takes the
 //   material's absolute refractive index at scene.wavelength_nm and its
 //   absorption (0 when not modelled); opaque materials become opaque solids.
+// - Meshes are loaded from their files (render/mesh_file.h; InputError naming
+//   the scene and the mesh's field for a missing or bad file).
 // - Rectangles (targets, markers, backdrops) become opaque Rectangle solids
 //   with their material's albedo (white, albedo 1, without one); glass
 //   rectangles are refused (a zero-thickness surface has no inside).
@@ -27,7 +29,7 @@
 namespace glasspiv {
 
 struct TraceSceneBuildInfo {
-  int spheres = 0, boxes = 0, slabs = 0, cylinders = 0, rectangles = 0;
+  int spheres = 0, boxes = 0, slabs = 0, cylinders = 0, meshes = 0, rectangles = 0;
   std::vector<int> rectangle_solids;  // solid index of scene.rectangles[i]
 };
 

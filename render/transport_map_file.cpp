@@ -102,6 +102,17 @@ struct ShapeHasher {
     h.f64(r.half_width_mm);
     h.f64(r.half_height_mm);
   }
+  void operator()(const TriangleMesh& m) const {
+    h.u64(m.vertices_mm().size());
+    for (const Eigen::Vector3d& v : m.vertices_mm()) h.vec3(v);
+    h.u64(m.triangle_count());
+    for (std::size_t k = 0; k < m.triangle_count(); ++k) {
+      for (std::uint32_t i : m.triangles()[k]) h.u64(i);
+      if (m.shading() == MeshShading::smooth)
+        for (const Eigen::Vector3d& n : m.corner_normals(k)) h.vec3(n);
+    }
+    h.u64(static_cast<std::uint64_t>(m.shading()));
+  }
 };
 
 // ---------------------------------------------------------------- checksum

@@ -35,7 +35,7 @@
 #include <optional>
 #include <vector>
 
-#include "render/shapes.h"
+#include "render/hit.h"
 
 namespace glasspiv {
 
