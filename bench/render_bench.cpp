@@ -1,8 +1,9 @@
-// render_bench: light-transport map of data/scenes/reactor.yaml (first camera)
-// and the run-time-versus-error table of the forward render.
-//   render_bench [--full] [--threads N] [--picture PATH]
-// Headline figure: the camera scaled by 1/4 (fx, fy, cx, cy; 640 x 540 px) by
-// default, the real 2560 x 2160 camera with --full. Never a crop or a pixel subset.
+// render_bench: the light-transport map of data/scenes/reactor.yaml and the
+// run-time-versus-error table of the forward render.
+//   render_bench [--size N] [--table-size M] [--threads N] [--picture PATH] [--no-table]
+// Camera: the scene's camera resampled to N x N px (default 1000): the central
+// square of its 2560 x 2160 sensor with fx, fy, cx, cy scaled by N / 2160, so
+// the view is the real camera's, at 1 megapixel. Every pixel is traced.
 #include <sys/resource.h>
 
 #include <chrono>
@@ -13,12 +14,13 @@
 #include <thread>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
-
 #include "render/forward_render.h"
+#include "render/path_tracer.h"
 #include "render/scene_yaml.h"
+#include "render/sheet_pattern.h"
 #include "render/trace_scene_builder.h"
 #include "render/transport_map.h"
+#include "util/image_file.h"
 
 using namespace glasspiv;
 
@@ -34,29 +36,38 @@ double peak_rss_mib() {
   return u.ru_maxrss / 1024.0;  // Linux: KiB
 }
 
-float checker(double s_mm, double t_mm) {
-  const long i = static_cast<long>(std::floor(s_mm / 10.0)) + static_cast<long>(std::floor(t_mm / 10.0));
-  return (i & 1) ? 1.0f : 0.0f;
+CameraModel square(const CameraModel& m, int n) {
+  const double k = static_cast<double>(n) / m.height_px();
+  const double crop = 0.5 * (m.width_px() - m.height_px());  // columns cut on each side
+  return CameraModel(n, n, m.fx_px() * k, m.fy_px() * k, (m.cx_px() + 0.5 - crop) * k - 0.5, (m.cy_px() + 0.5) * k - 0.5,
+                     m.distortion());
 }
 
-CameraModel scaled(const CameraModel& m, int k) {
-  if (k == 1) return m;
-  return CameraModel(m.width_px() / k, m.height_px() / k, m.fx_px() / k, m.fy_px() / k, (m.cx_px() + 0.5) / k - 0.5,
-                     (m.cy_px() + 0.5) / k - 0.5, m.distortion());
+double rms_difference(const std::vector<float>& a, const std::vector<float>& b) {
+  double sum = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) sum += (double(a[i]) - b[i]) * (double(a[i]) - b[i]);
+  return std::sqrt(sum / a.size());
+}
+
+// Forward render with one point sample per crossing (no footprint filter), for comparison.
+std::vector<float> point_sampled(const TransportMap& map, const SheetTexture& tex) {
+  return forward_render_values(map, [&](double s, double t) { return tex.at(s, t); });
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool full = false;
-  int threads = 0;
+  int size = 1000, table_size = 400, threads = 0;
+  bool table = true;
   std::string picture;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--full")) full = true;
+    if (!std::strcmp(argv[i], "--size") && i + 1 < argc) size = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--table-size") && i + 1 < argc) table_size = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) threads = std::atoi(argv[++i]);
     else if (!std::strcmp(argv[i], "--picture") && i + 1 < argc) picture = argv[++i];
+    else if (!std::strcmp(argv[i], "--no-table")) table = false;
     else {
-      std::fprintf(stderr, "usage: render_bench [--full] [--threads N] [--picture PATH]\n");
+      std::fprintf(stderr, "usage: render_bench [--size N] [--table-size M] [--threads N] [--picture PATH] [--no-table]\n");
       return 2;
     }
   }
@@ -66,75 +77,106 @@ int main(int argc, char** argv) {
   const TraceScene ts = build_trace_scene(scene, &info);
   const Camera& camera = scene.cameras.at(0).camera;
   const RigidTransform& pose = *camera.camera_from_world;
-  const CameraModel cam = scaled(camera.model, full ? 1 : 4);
-  std::printf("reactor.yaml: %zu solids (%d spheres), camera %s %dx%d%s, %d threads\n", ts.solids.size(),
-              info.spheres, scene.cameras[0].name.c_str(), cam.width_px(), cam.height_px(),
-              full ? " (real camera)" : " (real camera scaled by 1/4: fx, fy, cx, cy)", threads);
+  const CameraModel cam = square(camera.model, size);
+  std::printf("reactor.yaml: %zu solids (%d spheres), camera %s resampled to %dx%d, %d threads\n", ts.solids.size(),
+              info.spheres, scene.cameras[0].name.c_str(), cam.width_px(), cam.height_px(), threads);
 
-  // Headline: default TraceOptions (reflections on, min_weight 1e-6), 1 sample per pixel.
-  {
-    const TraceOptions options;
+  // Headline: the map at 1 sample per pixel, three settings.
+  struct Setting {
+    const char* name;
+    bool reflections;
+    double min_weight;
+  };
+  std::printf("\n| setting | s per MP | camera rays/s | branches/ray | crossings/px | rays in closed form | map MiB |\n");
+  std::printf("|---|---|---|---|---|---|---|\n");
+  for (const Setting& s : {Setting{"refraction only, min_weight 1e-2", false, 1e-2},
+                           Setting{"reflections, min_weight 1e-2", true, 1e-2},
+                           Setting{"reflections, min_weight 1e-3", true, 1e-3}}) {
+    TraceOptions options;
+    options.reflections = s.reflections;
+    options.min_weight = s.min_weight;
     const auto t0 = std::chrono::steady_clock::now();
     const TransportMap map = build_transport_map(ts, cam, pose, options, 1, threads);
     const double t = seconds_since(t0);
-    const double mpix = map.pixel_count() / 1e6;
-    std::printf("headline (reflections on, min_weight %.0e, 1 sample/px):\n", options.min_weight);
-    std::printf("  time %.3f s, %.3f s per megapixel\n", t, t / mpix);
-    std::printf("  camera rays/s %.3g, branches/s %.3g, branches per ray %.2f\n", map.stats.camera_rays / t,
-                map.stats.branches_traced / t, double(map.stats.branches_traced) / map.stats.camera_rays);
-    std::printf("  crossings per pixel %.3f, pixels with no solid hit %ld of %zu\n",
-                double(map.crossing_count()) / map.pixel_count(), map.stats.pixels_without_solid_hit,
-                map.pixel_count());
-    std::printf("  map %.1f MiB, peak RSS %.1f MiB\n", map.memory_bytes() / 1048576.0, peak_rss_mib());
+    std::printf("| %s | %.3f | %.3g | %.2f | %.3f | %.1f %% | %.1f |\n", s.name, t / (map.pixel_count() / 1e6),
+                map.stats.camera_rays / t, double(map.stats.branches_traced) / map.stats.camera_rays,
+                double(map.crossing_count()) / map.pixel_count(),
+                100.0 * map.stats.closed_form_rays / map.stats.camera_rays, map.memory_bytes() / 1048576.0);
+  }
+  std::printf("peak RSS %.1f MiB\n", peak_rss_mib());
+
+  // Float storage vs the double tracer: the map stores s, t as float; the
+  // tracer works in double. Largest difference on the sheet, in micrometres.
+  {
+    TraceOptions options;
+    options.min_weight = 1e-2;
+    const CameraModel small = square(camera.model, 200);
+    const TransportMap map = build_transport_map(ts, small, pose, options, 1, threads);
+    const auto index = make_scene_index(ts);
+    TraceResult r;
+    double worst_um = 0;
+    std::size_t i = 0;
+    for (int row = 0; row < small.height_px(); ++row)
+      for (int col = 0; col < small.width_px(); ++col) {
+        const auto ray = pixel_camera_ray(small, pose, Eigen::Vector2d(col, row));
+        if (!ray) continue;
+        trace_ray(ts, *index, *ray, options, &r);
+        for (const SheetCrossing& c : r.crossings) {
+          worst_um = std::max({worst_um, 1e3 * std::abs(c.s_mm - map.s_mm[i]), 1e3 * std::abs(c.t_mm - map.t_mm[i])});
+          ++i;
+        }
+      }
+    std::printf("\nfloat map vs double tracer: largest |s, t| difference on the sheet %.4f um over %zu crossings\n",
+                worst_um, i);
   }
 
-  // Run time versus error, always on the 1/4 camera.
-  const CameraModel small = scaled(camera.model, 4);
+  if (!table) return 0;
+  // Run time versus error on a smaller camera: a 5 mm checkerboard on the sheet,
+  // RMS difference of the rendered image to the reference (4 x 4 samples,
+  // min_weight 1e-4, reflections on), with the footprint filter and without.
+  const CameraModel tcam = square(camera.model, table_size);
+  const SheetPicture checker = checkerboard_picture(ts.sheet.extent_s_mm, ts.sheet.extent_t_mm, 5.0);
+  const SheetTexture tex(checker.values.data(), checker.rows, checker.cols, checker.mm_per_texel);
   struct Row {
     int k;
     double min_weight;
     bool reflections;
-    double seconds = 0;
-    double crossings_per_px = 0;
-    cv::Mat image;
+    double seconds = 0, crossings_per_px = 0, rms_filtered = 0, rms_point = 0;
   };
+  TraceOptions ref_options;
+  ref_options.min_weight = 1e-4;
+  const TransportMap ref_map = build_transport_map(ts, tcam, pose, ref_options, 4, threads);
+  const std::vector<float> ref = forward_render_values(ref_map, tex);
   std::vector<Row> rows;
-  for (int k : {1, 2})
-    for (double mw : {1e-2, 1e-3, 1e-4})
-      for (bool refl : {true, false}) rows.push_back({k, mw, refl, 0, 0, cv::Mat()});
+  for (int k : {1, 2, 3})
+    for (double mw : {1e-1, 1e-2, 1e-3})
+      for (bool refl : {true, false}) rows.push_back({k, mw, refl});
   for (Row& r : rows) {
     TraceOptions options;
     options.min_weight = r.min_weight;
     options.reflections = r.reflections;
     const auto t0 = std::chrono::steady_clock::now();
-    const TransportMap map = build_transport_map(ts, small, pose, options, r.k, threads);
+    const TransportMap map = build_transport_map(ts, tcam, pose, options, r.k, threads);
     r.seconds = seconds_since(t0);
     r.crossings_per_px = double(map.crossing_count()) / map.pixel_count();
-    r.image = forward_render(map, checker, scene.background.radiance);
+    r.rms_filtered = rms_difference(forward_render_values(map, tex), ref);
+    r.rms_point = rms_difference(point_sampled(map, tex), ref);
   }
-  const Row& ref = rows[10];
-  std::printf("\nrun time vs error, %dx%d camera, checkerboard 10 mm (0/1), reference = %d samples/axis, "
-              "min_weight %.0e, reflections %s:\n",
-              small.width_px(), small.height_px(), ref.k, ref.min_weight, ref.reflections ? "on" : "off");
-  std::printf("| samples/axis | min_weight | reflections | time (s) | crossings/px | RMS diff vs reference |\n");
-  std::printf("|---|---|---|---|---|---|\n");
-  for (const Row& r : rows) {
-    const double rms = cv::norm(r.image, ref.image, cv::NORM_L2) / std::sqrt(double(r.image.total()));
-    std::printf("| %d | %.0e | %s | %.3f | %.3f | %.5f |\n", r.k, r.min_weight, r.reflections ? "on" : "off",
-                r.seconds, r.crossings_per_px, rms);
-  }
+  std::printf("\nrun time vs error, %dx%d camera, 5 mm checkerboard (0/1), reference 4x4 samples, min_weight 1e-4, "
+              "reflections on:\n",
+              tcam.width_px(), tcam.height_px());
+  std::printf("| samples/axis | min_weight | reflections | s per MP | crossings/px | RMS error, footprint filter | "
+              "RMS error, point samples |\n|---|---|---|---|---|---|---|\n");
+  for (const Row& r : rows)
+    std::printf("| %d | %.0e | %s | %.3f | %.3f | %.4f | %.4f |\n", r.k, r.min_weight, r.reflections ? "on" : "off",
+                r.seconds / (tcam.width_px() * double(tcam.height_px()) / 1e6), r.crossings_per_px, r.rms_filtered,
+                r.rms_point);
   std::printf("peak RSS %.1f MiB\n", peak_rss_mib());
 
   if (!picture.empty()) {
-    double lo = 0, hi = 0;
-    cv::minMaxLoc(ref.image, &lo, &hi);
-    cv::Mat out;
-    ref.image.convertTo(out, CV_8U, hi > lo ? 255.0 / (hi - lo) : 1.0, hi > lo ? -255.0 * lo / (hi - lo) : 0.0);
-    if (!cv::imwrite(picture, out)) {
-      std::fprintf(stderr, "render_bench: cannot write %s\n", picture.c_str());
-      return 1;
-    }
-    std::printf("wrote %s (%dx%d, normalised from [%.4f, %.4f])\n", picture.c_str(), out.cols, out.rows, lo, hi);
+    std::vector<float> img = ref;
+    write_gray_image(picture, img.data(), tcam.width_px(), tcam.height_px(), PixelFormat::uint8);
+    std::printf("wrote %s\n", picture.c_str());
   }
   return 0;
 }
