@@ -26,7 +26,7 @@ struct RenderOptions {
   bool setup = false, no_reflections = false;
   double background = -1, texture_mm_per_px = 0, pattern_mm = 10, particle_density = 2, particle_diameter_mm = 0.2, gain = 1;
   double min_weight = TraceOptions{}.min_weight;
-  int max_depth = TraceOptions{}.max_depth, samples = 0, threads = 0;
+  int max_depth = TraceOptions{}.max_depth, samples = 0, threads = 0, binning = 1;
   std::uint64_t seed = 1;
 };
 
@@ -75,7 +75,7 @@ void run_render(const RenderOptions& o) {
   if (!o.sheet_texture.empty()) check_not_input(o.sheet_texture, o.output);
   if (!o.map.empty()) check_not_input(o.scene, o.map);
 
-  const PreparedScene ps = prepare_scene(o.scene, o.camera);
+  const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning);
   TraceOptions options;
   options.min_weight = o.min_weight;
   options.max_depth = o.max_depth;
@@ -176,6 +176,9 @@ void register_render_command(CLI::App& app) {
   r->add_option("--map", o->map,
                 "Transport map cache: reused when it was made for this exact scene, camera and settings; "
                 "otherwise traced and written there");
+  r->add_option("--binning", o->binning,
+                "Render with the camera read out K x K binned (a quick preview at 1/K^2 of the cost)")
+      ->check(CLI::Range(1, 64));
   r->add_option("--samples", o->samples, "Samples per pixel axis (default 1; 2 with --setup)")
       ->check(CLI::Range(1, 16));
   r->add_option("--min-weight", o->min_weight, "Branches below this weight are not followed")

@@ -15,7 +15,7 @@ std::vector<const SheetTexture*> PreparedScene::textures_by_solid() const {
   return out;
 }
 
-PreparedScene prepare_scene(const std::string& path, const std::string& camera_name) {
+PreparedScene prepare_scene(const std::string& path, const std::string& camera_name, int binning) {
   PreparedScene ps;
   ps.scene = read_scene(path);
   if (!ps.scene.sheet) throw InputError(path, "sheet", "the scene has no sheet to render");
@@ -30,6 +30,8 @@ PreparedScene prepare_scene(const std::string& path, const std::string& camera_n
     if (ps.camera_index < 0)
       throw InputError(path, "--camera", fmt::format("no camera '{}' in the scene (it has: {})", camera_name, names));
   }
+  Camera& chosen = ps.scene.cameras[static_cast<std::size_t>(ps.camera_index)].camera;
+  if (binning > 1) chosen.model = binned(chosen.model, binning);
   ps.trace = build_trace_scene(ps.scene, &ps.info);
   for (const RectangleSolid& r : ps.scene.rectangles) {
     if (r.texture.empty()) {

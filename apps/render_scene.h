@@ -27,8 +27,9 @@ struct PreparedScene {
   std::vector<const SheetTexture*> textures_by_solid() const;
 };
 
-// camera_name "" = the first camera. A scene without a sheet or without
+// camera_name "" = the first camera; binning > 1 reads the chosen camera out
+// binned (calib/camera_model.h: binned). A scene without a sheet or without
 // cameras, or an unknown camera name, is an InputError.
-PreparedScene prepare_scene(const std::string& path, const std::string& camera_name);
+PreparedScene prepare_scene(const std::string& path, const std::string& camera_name, int binning = 1);
 
 }  // namespace glasspiv

@@ -227,4 +227,13 @@ bool CameraModel::operator==(const CameraModel& other) const {
          intrinsics_ == other.intrinsics_;
 }
 
+CameraModel binned(const CameraModel& m, int factor) {
+  if (factor < 1 || m.width_px() / factor < 1 || m.height_px() / factor < 1)
+    throw InputError("", "binning", "must be a whole number from 1 to the image size");
+  if (factor == 1) return m;
+  const double k = factor;
+  return CameraModel(m.width_px() / factor, m.height_px() / factor, m.fx_px() / k, m.fy_px() / k,
+                     (m.cx_px() + 0.5) / k - 0.5, (m.cy_px() + 0.5) / k - 0.5, m.distortion());
+}
+
 }  // namespace glasspiv

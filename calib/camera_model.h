@@ -105,4 +105,11 @@ class CameraModel {
   double fold_radius_ = kFoldSearchRadius;  // min over the directions, with a margin
 };
 
+// The same lens and sensor read out with factor x factor pixel binning: size,
+// focal lengths and principal point scaled by 1/factor (pixel centres kept:
+// cx' = (cx + 1/2) / factor - 1/2), distortion unchanged (it acts on normalised
+// coordinates). Previews and quick renders at a fraction of the cost. Width and
+// height round down; throws InputError if factor < 1 or the image vanishes.
+CameraModel binned(const CameraModel& model, int factor);
+
 }  // namespace glasspiv

@@ -29,7 +29,8 @@ namespace glasspiv {
 // Sheet radiance at sheet coordinates (mm).
 using SheetSampler = std::function<float(double s_mm, double t_mm)>;
 
-// Row-major width * height image; sums in double per pixel.
+// Row-major width * height image; sums in double per pixel. The filtered
+// render runs on all cores (rows in parallel; the result does not depend on it).
 std::vector<float> forward_render_values(const TransportMap& map, const SheetSampler& texture,
                                          double background_radiance = 0);
 
