@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
 #include "render/forward_render.h"
+#include "render/path_tracer.h"
 #include "render/scene_yaml.h"
 #include "render/trace_scene_builder.h"
 #include "render/transport_map.h"
@@ -183,6 +185,40 @@ TEST(TransportMap, DeterministicOverThreadCounts) {
   EXPECT_TRUE(same(a.opaque_weight, b.opaque_weight));
   EXPECT_EQ(a.stats.branches_traced, b.stats.branches_traced);
   EXPECT_GT(a.crossing_count(), a.pixel_count());
+}
+
+// The map stores float32; the tracer works in double. Every stored crossing
+// equals the double tracer's to float rounding: |s| <= 65 mm here, so half an
+// ulp is <= 65 * 2^-24 mm = 3.9 nm. The figure is reported in micrometres.
+TEST(TransportMap, FloatMapMatchesTheDoubleTracerToFloatRounding) {
+  const Scene scene = read_scene(std::string(GLASSPIV_SOURCE_DIR) + "/data/scenes/reactor.yaml");
+  const TraceScene ts = build_trace_scene(scene);
+  const Camera& camera = scene.cameras[0].camera;
+  const CameraModel cam = binned(camera.model, 32);  // 80 x 67 px over the whole view
+  const TransportMap map = build_transport_map(ts, cam, *camera.camera_from_world, TraceOptions{}, 1, 2);
+  const auto index = make_scene_index(ts);
+  TraceResult r;
+  std::size_t i = 0;
+  double worst_um = 0, worst_rel_jacobian = 0;
+  for (int row = 0; row < cam.height_px(); ++row) {
+    for (int col = 0; col < cam.width_px(); ++col) {
+      trace_ray(ts, *index, *pixel_camera_ray(cam, *camera.camera_from_world, Eigen::Vector2d(col, row)), TraceOptions{}, &r);
+      for (const SheetCrossing& c : r.crossings) {
+        ASSERT_LT(i, map.crossing_count());
+        EXPECT_LE(std::abs(c.s_mm - map.s_mm[i]), float_tol(c.s_mm));
+        EXPECT_LE(std::abs(c.t_mm - map.t_mm[i]), float_tol(c.t_mm));
+        worst_um = std::max({worst_um, 1e3 * std::abs(c.s_mm - map.s_mm[i]), 1e3 * std::abs(c.t_mm - map.t_mm[i])});
+        const double j = c.dst_dpixel.norm();
+        worst_rel_jacobian = std::max(worst_rel_jacobian, std::abs(c.dst_dpixel(0, 0) - map.ds_dcol[i]) / j);
+        ++i;
+      }
+    }
+  }
+  EXPECT_EQ(i, map.crossing_count());
+  EXPECT_GT(i, 1000u);
+  EXPECT_LT(worst_rel_jacobian, 1e-7);
+  std::printf("float map vs double tracer: %zu crossings, worst %.4f um on the sheet, footprint %.1e relative\n", i,
+              worst_um, worst_rel_jacobian);
 }
 
 TEST(TraceSceneBuilder, ConvertsSolidsAndSheet) {
