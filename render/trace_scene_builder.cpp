@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "render/mesh_file.h"
+#include "render/overlap.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
@@ -32,19 +33,24 @@ TraceScene build_trace_scene(const Scene& scene, TraceSceneBuildInfo* info) {
   TraceScene out;
   out.fluid_index = scene.material(scene.fluid, "fluid").refractive_index(scene.wavelength_nm);
 
+  std::vector<std::string> fields;  // per solid, for errors
   for (const SphereSolid& s : scene.all_spheres()) {
+    fields.push_back(s.field);
     out.solids.push_back({Sphere{s.centre_mm, 0.5 * s.diameter_mm}, trace_material(scene, s.material, s.field)});
     ++counts.spheres;
   }
   for (const BoxSolid& b : scene.boxes) {
+    fields.push_back(b.field);
     out.solids.push_back({to_trace_box(b), trace_material(scene, b.material, b.field)});
     ++counts.boxes;
   }
   for (const SlabSolid& s : scene.slabs) {
+    fields.push_back(s.field);
     out.solids.push_back({to_trace_box(s.to_box()), trace_material(scene, s.material, s.field)});
     ++counts.slabs;
   }
   for (const CylinderSolid& c : scene.cylinders) {
+    fields.push_back(c.field);
     Cylinder cyl;
     cyl.axis = c.axis.normalized();
     cyl.centre_mm = c.base_centre_mm + 0.5 * c.length_mm * cyl.axis;
@@ -54,6 +60,7 @@ TraceScene build_trace_scene(const Scene& scene, TraceSceneBuildInfo* info) {
     ++counts.cylinders;
   }
   for (const MeshSolid& m : scene.meshes) {
+    fields.push_back(m.field);
     out.solids.push_back({load_scene_mesh(scene, m), trace_material(scene, m.material, m.field)});
     ++counts.meshes;
   }
@@ -73,10 +80,19 @@ TraceScene build_trace_scene(const Scene& scene, TraceSceneBuildInfo* info) {
     rect.up = r.normal.normalized().cross(rect.right);  // exactly orthonormal
     rect.half_width_mm = 0.5 * r.size_mm[0];
     rect.half_height_mm = 0.5 * r.size_mm[1];
+    fields.push_back(r.field);
     counts.rectangle_solids.push_back(static_cast<int>(out.solids.size()));
     out.solids.push_back({rect, material});
     ++counts.rectangles;
   }
+
+  std::vector<Shape> shapes;
+  shapes.reserve(out.solids.size());
+  for (const TraceSolid& solid : out.solids) shapes.push_back(solid.shape);
+  if (const auto pair = find_overlap(shapes, kSphereOverlapTolerance_mm))
+    throw InputError(scene.source, fields[static_cast<std::size_t>(pair->first)],
+                     "overlaps " + fields[static_cast<std::size_t>(pair->second)] +
+                         " (solids may touch but not overlap: the tracer follows a ray inside one solid only)");
 
   const Sheet& sh = *scene.sheet;
   out.sheet.origin_mm = sh.origin_mm;

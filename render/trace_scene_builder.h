@@ -34,7 +34,8 @@ struct TraceSceneBuildInfo {
 };
 
 // Throws InputError (via Scene::material / Material::refractive_index) for an
-// unknown material or a wavelength outside a formula's range, and
+// unknown material or a wavelength outside a formula's range, InputError naming
+// both fields for two solids that overlap (render/overlap.h), and
 // std::invalid_argument when the scene has no sheet.
 TraceScene build_trace_scene(const Scene& scene, TraceSceneBuildInfo* info = nullptr);
 
