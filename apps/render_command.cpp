@@ -71,6 +71,11 @@ void run_render(const RenderOptions& o) {
     throw InputError(o.output, "-o", "must end in .tif, .tiff, .png or .exr");
   const PixelFormat format = !o.format.empty() ? pixel_format_from_name(o.format, "--format")
                                                : (ext == ".exr" ? PixelFormat::float32 : PixelFormat::uint16);
+  // Refuse a format the file type cannot hold now, not after minutes of tracing.
+  if (ext == ".png" && format == PixelFormat::float32)
+    throw InputError(o.output, "--format", "PNG holds 8 or 16 bits, not float (use .tif or .exr)");
+  if (ext == ".exr" && format != PixelFormat::float32)
+    throw InputError(o.output, "--format", "EXR holds float only (use .tif or .png for 8 or 16 bits)");
   check_not_input(o.scene, o.output);
   if (!o.sheet_texture.empty()) check_not_input(o.sheet_texture, o.output);
   if (!o.map.empty()) check_not_input(o.scene, o.map);
@@ -161,7 +166,7 @@ void register_render_command(CLI::App& app) {
   r->add_option("--sheet-texture", o->sheet_texture, "Image laid on the sheet (TIFF, PNG, EXR, ...)")
       ->check(CLI::ExistingFile);
   r->add_option("--texture-mm-per-px", o->texture_mm_per_px,
-                "Size of one texture pixel on the sheet (default: the image fits the sheet's extent)")
+                "Size of one texture pixel on the sheet (default: the image, centred, just covers the sheet's extent)")
       ->check(CLI::PositiveNumber);
   r->add_option("--sheet-pattern", o->pattern, "Built-in picture on the sheet instead of an image")
       ->check(CLI::IsMember({"checker", "grid", "particles"}));

@@ -160,6 +160,7 @@ UnprojectResult CameraModel::unproject(const Eigen::Vector2d& pixel, double tole
   }
   const Eigen::Vector2d target((pixel.x() - cx_px()) / fx_px(), (pixel.y() - cy_px()) / fy_px());
   Eigen::Vector2d n = target;  // the undistorted guess is close for realistic lenses
+  result.dpixel_dnormalized = Eigen::Vector2d(fx_px(), fy_px()).asDiagonal();
   if (lens_model_ != LensModel::Pinhole) {
     constexpr int kMaxIterations = 100;
     Eigen::Matrix2d j;
@@ -199,6 +200,7 @@ UnprojectResult CameraModel::unproject(const Eigen::Vector2d& pixel, double tole
       result.status = UnprojectStatus::BeyondFold;
       return result;
     }
+    result.dpixel_dnormalized = j;
   }
   result.status = UnprojectStatus::Ok;
   result.normalized = n;

@@ -35,6 +35,9 @@ struct UnprojectResult {
   UnprojectStatus status = UnprojectStatus::NotConverged;
   Eigen::Vector3d ray_camera = Eigen::Vector3d::Zero();  // unit vector, z > 0, when Ok
   Eigen::Vector2d normalized = Eigen::Vector2d::Zero();  // (X/Z, Y/Z) when Ok
+  // d(pixel)/d(normalised) at the solution when Ok (the last Newton Jacobian):
+  // ray differentials need it, and it comes for free.
+  Eigen::Matrix2d dpixel_dnormalized = Eigen::Matrix2d::Zero();
   int iterations = 0;
   bool ok() const { return status == UnprojectStatus::Ok; }
 };

@@ -13,7 +13,7 @@ namespace {
 
 TraceMaterial trace_material(const Scene& scene, const std::string& name, const std::string& field) {
   const Material m = scene.material(name, field);
-  if (m.kind == MaterialKind::opaque) return TraceMaterial::opaque();
+  if (m.kind == MaterialKind::opaque) return TraceMaterial::opaque(m.albedo.value_or(0.0));
   return TraceMaterial::glass(m.refractive_index(scene.wavelength_nm), m.absorption_per_mm.value_or(0.0));
 }
 
@@ -119,8 +119,7 @@ std::optional<CameraRay> pixel_camera_ray(const CameraModel& model, const RigidT
                                           const Eigen::Vector2d& pixel) {
   const UnprojectResult u = model.unproject(pixel);
   if (!u.ok()) return std::nullopt;
-  Eigen::Matrix2d dpixel_dnormalized;
-  model.project_normalized(u.normalized, &dpixel_dnormalized);
+  const Eigen::Matrix2d& dpixel_dnormalized = u.dpixel_dnormalized;
   const double det = dpixel_dnormalized.determinant();
   if (!(std::abs(det) > 0) || !std::isfinite(det)) return std::nullopt;  // singular: at a fold
   Eigen::Matrix<double, 3, 2> dray_dpixel = Eigen::Matrix<double, 3, 2>::Zero();

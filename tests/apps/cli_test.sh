@@ -129,6 +129,7 @@ grep -q "another setup" "$work/out" && ok || fail "changed settings reused the m
 expect_ok "$glasspiv" render "$work/lens.yaml" --setup -o "$work/setup.png" --format 8 --background 1
 [ -s "$work/setup.png" ] && ok || fail "render --setup wrote nothing"
 expect_error 2 "exactly one" -- "$glasspiv" render "$work/lens.yaml" -o "$work/x.tif"
+expect_error 2 "x.png" "--format" "float" -- "$glasspiv" render "$work/lens.yaml" --setup -o "$work/x.png" --format float
 expect_error 2 "x.jpg" "-o" -- "$glasspiv" render "$work/lens.yaml" --setup -o "$work/x.jpg"
 expect_error 2 "lens.yaml" "--camera" "small" -- "$glasspiv" render "$work/lens.yaml" --setup --camera nope -o "$work/x.tif"
 sed 's/look_at_mm: \[0, 0, 40\]/look_at_mm: [0, 0, -1000]/' "$work/lens.yaml" >"$work/away.yaml"

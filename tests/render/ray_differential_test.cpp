@@ -4,6 +4,7 @@
 // BVH gives bit-identical paths to the linear-search reference.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <random>
 
@@ -38,6 +39,32 @@ TEST(RayDifferentials, EmptySceneFootprintIsThePinholeJacobian) {
       EXPECT_EQ(r.counts.closed_form, 1);  // no solid: no BVH query
     }
   }
+}
+
+// The camera ray's differential through a strongly distorted lens (rational
+// model) against central differences of the unprojected directions.
+TEST(RayDifferentials, CameraRayDifferentialThroughLensDistortion) {
+  const CameraModel lens(640, 480, 500, 510, 321.3, 238.9, {-0.25, 0.08, 1e-3, -2e-3, -0.01, 0.02, 0.005, 0.001});
+  const RigidTransform pose{Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix(),
+                            Eigen::Vector3d(10, -20, 300)};
+  const double h = 1e-3;
+  double worst = 0;
+  for (double u : {0.0, 101.7, 320.0, 639.0})
+    for (double v : {0.0, 240.2, 479.0}) {
+      const Eigen::Vector2d px(u, v);
+      const auto ray = pixel_camera_ray(lens, pose, px);
+      ASSERT_TRUE(ray);
+      for (int axis = 0; axis < 2; ++axis) {
+        const Eigen::Vector2d step = axis == 0 ? Eigen::Vector2d(h, 0) : Eigen::Vector2d(0, h);
+        const auto p = pixel_camera_ray(lens, pose, px + step), m = pixel_camera_ray(lens, pose, px - step);
+        ASSERT_TRUE(p && m);
+        const Eigen::Vector3d fd = (p->direction - m->direction) / (2 * h);
+        worst = std::max(worst, (fd - ray->ddirection_dpixel.col(axis)).norm() / fd.norm());
+      }
+    }
+  // Central differences of a 1e-10 px accurate unprojection: truncation ~h^2,
+  // round-off ~1e-10 px / h relative to ~1 px.
+  EXPECT_LT(worst, 1e-6);
 }
 
 // Spheres (one in front of the sheet, one cut by it), a cylinder and a slab.
