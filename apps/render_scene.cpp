@@ -2,7 +2,10 @@
 
 #include <fmt/format.h>
 
+#include "apps/cli_files.h"
 #include "render/scene_yaml.h"
+#include "targets/target_image.h"
+#include "targets/target_yaml.h"
 #include "util/image_file.h"
 #include "util/input_error.h"
 
@@ -36,6 +39,17 @@ PreparedScene prepare_scene(const std::string& path, const std::string& camera_n
   for (const RectangleSolid& r : ps.scene.rectangles) {
     if (r.texture.empty()) {
       ps.rectangle_textures.emplace_back();
+      continue;
+    }
+    if (lower_extension(r.texture) == ".yaml" || lower_extension(r.texture) == ".yml") {
+      // A target spec: the board as printed (white margin included), at true
+      // scale, centred on the rectangle; 20 texels per mm keep the edges sharp.
+      const TargetSpec spec = read_target_yaml(r.texture);
+      const TargetRender board = render_target(spec, 20.0, default_margin_mm(spec));
+      cv::Mat values;
+      board.image.convertTo(values, CV_32F, 1.0 / 255);
+      ps.rectangle_textures.push_back(
+          std::make_unique<SheetTexture>(values.ptr<float>(0), values.rows, values.cols, 1.0 / board.px_per_mm));
       continue;
     }
     const GrayImage img = read_gray_image(r.texture);

@@ -128,6 +128,10 @@ expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern particles -o "$wo
 grep -q "another setup" "$work/out" && ok || fail "changed settings reused the map: $(cat "$work/out")"
 expect_ok "$glasspiv" render "$work/lens.yaml" --setup -o "$work/setup.png" --format 8 --background 1
 [ -s "$work/setup.png" ] && ok || fail "render --setup wrote nothing"
+cp "$src/data/targets/charuco_11x8_15mm.yaml" "$work/board.yaml"
+sed 's/material: grey}/texture: board.yaml}/' "$work/lens.yaml" >"$work/board_scene.yaml"
+expect_ok "$glasspiv" render "$work/board_scene.yaml" --setup -o "$work/board.png" --format 8
+[ -s "$work/board.png" ] && ok || fail "render --setup with a target texture wrote nothing"
 expect_error 2 "exactly one" -- "$glasspiv" render "$work/lens.yaml" -o "$work/x.tif"
 expect_error 2 "x.png" "--format" "float" -- "$glasspiv" render "$work/lens.yaml" --setup -o "$work/x.png" --format float
 expect_error 2 "x.jpg" "-o" -- "$glasspiv" render "$work/lens.yaml" --setup -o "$work/x.jpg"
