@@ -13,6 +13,7 @@
 #include "render/forward_render.h"
 #include "render/setup_render.h"
 #include "render/sheet_pattern.h"
+#include "render/scene_yaml.h"
 #include "render/transport_map_file.h"
 #include "util/image_file.h"
 #include "util/input_error.h"
@@ -62,6 +63,15 @@ std::function<void(int, int)> progress_of(ProgressBar* bar) {
   };
 }
 
+// path with "_<name>" before its extension: out.tif -> out_cam0.tif.
+std::string with_suffix(const std::string& path, const std::string& name) {
+  const std::filesystem::path p(path);
+  return (p.parent_path() / (p.stem().string() + "_" + name + p.extension().string())).string();
+}
+
+void render_camera(const RenderOptions& o, const std::string& camera_name, const std::string& output,
+                   const std::string& map_path, PixelFormat format);
+
 void run_render(const RenderOptions& o) {
   const int sources = !o.sheet_texture.empty() + !o.pattern.empty() + o.setup;
   if (sources != 1)
@@ -76,11 +86,24 @@ void run_render(const RenderOptions& o) {
     throw InputError(o.output, "--format", "PNG holds 8 or 16 bits, not float (use .tif or .exr)");
   if (ext == ".exr" && format != PixelFormat::float32)
     throw InputError(o.output, "--format", "EXR holds float only (use .tif or .png for 8 or 16 bits)");
-  check_not_input(o.scene, o.output);
-  if (!o.sheet_texture.empty()) check_not_input(o.sheet_texture, o.output);
-  if (!o.map.empty()) check_not_input(o.scene, o.map);
+  if (o.camera != "all") {
+    render_camera(o, o.camera, o.output, o.map, format);
+    return;
+  }
+  // Every camera of the scene: OUT and MAP get the camera's name before their extension.
+  const Scene scene = read_scene(o.scene);
+  for (const SceneCamera& cam : scene.cameras)
+    render_camera(o, cam.name, with_suffix(o.output, cam.name), o.map.empty() ? "" : with_suffix(o.map, cam.name),
+                  format);
+}
 
-  const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning);
+void render_camera(const RenderOptions& o, const std::string& camera_name, const std::string& output,
+                   const std::string& map_path, PixelFormat format) {
+  check_not_input(o.scene, output);
+  if (!o.sheet_texture.empty()) check_not_input(o.sheet_texture, output);
+  if (!map_path.empty()) check_not_input(o.scene, map_path);
+
+  const PreparedScene ps = prepare_scene(o.scene, camera_name, o.binning);
   TraceOptions options;
   options.min_weight = o.min_weight;
   options.max_depth = o.max_depth;
@@ -111,14 +134,14 @@ void run_render(const RenderOptions& o) {
     const int samples = o.samples > 0 ? o.samples : 1;
     const std::uint64_t fingerprint = transport_map_fingerprint(ps.trace, camera.model, pose, options, samples);
     std::optional<TransportMap> map;
-    if (!o.map.empty()) {
+    if (!map_path.empty()) {
       std::string why;
-      map = load_cached_transport_map(o.map, fingerprint, &why);
+      map = load_cached_transport_map(map_path, fingerprint, &why);
       if (map)
-        std::printf("reused the transport map %s (fingerprint %s): nothing re-traced\n", o.map.c_str(),
+        std::printf("reused the transport map %s (fingerprint %s): nothing re-traced\n", map_path.c_str(),
                     fingerprint_hex(fingerprint).c_str());
       else
-        std::printf("tracing a new transport map (cache %s: %s)\n", o.map.c_str(), why.c_str());
+        std::printf("tracing a new transport map (cache %s: %s)\n", map_path.c_str(), why.c_str());
     }
     if (!map) {
       ProgressBar bar("trace map", static_cast<std::size_t>(camera.model.height_px()));
@@ -138,9 +161,9 @@ void run_render(const RenderOptions& o) {
         throw InputError(o.scene, ps.camera_field(),
                          fmt::format("camera '{}' sees none of the sheet: check its pose and the sheet's extent",
                                      ps.camera_name()));
-      if (!o.map.empty()) {
-        write_transport_map(o.map, *map, fingerprint);
-        std::printf("wrote the transport map %s (%.1f MiB, fingerprint %s)\n", o.map.c_str(),
+      if (!map_path.empty()) {
+        write_transport_map(map_path, *map, fingerprint);
+        std::printf("wrote the transport map %s (%.1f MiB, fingerprint %s)\n", map_path.c_str(),
                     map->memory_bytes() / 1048576.0, fingerprint_hex(fingerprint).c_str());
       }
     }
@@ -149,8 +172,8 @@ void run_render(const RenderOptions& o) {
   }
   if (o.gain != 1)
     for (float& v : image) v = static_cast<float>(v * o.gain);
-  write_gray_image(o.output, image.data(), camera.model.width_px(), camera.model.height_px(), format);
-  std::printf("wrote %s (%dx%d, %s)\n", o.output.c_str(), camera.model.width_px(), camera.model.height_px(),
+  write_gray_image(output, image.data(), camera.model.width_px(), camera.model.height_px(), format);
+  std::printf("wrote %s (%dx%d, %s)\n", output.c_str(), camera.model.width_px(), camera.model.height_px(),
               pixel_format_name(format));
 }
 
@@ -162,7 +185,9 @@ void register_render_command(CLI::App& app) {
       "render", "Render what a scene camera records: a textured light sheet through the glass, or the setup itself");
   r->add_option("scene", o->scene, "Scene file (docs/scene.md)")->required()->check(CLI::ExistingFile);
   r->add_option("-o,--output", o->output, "Image to write: .tif, .png or .exr")->required();
-  r->add_option("--camera", o->camera, "Camera name in the scene (default: the first)");
+  r->add_option("--camera", o->camera,
+                "Camera name in the scene (default: the first); 'all': every camera, OUT (and --map) get "
+                "'_<camera>' before the extension");
   r->add_option("--sheet-texture", o->sheet_texture, "Image laid on the sheet (TIFF, PNG, EXR, ...)")
       ->check(CLI::ExistingFile);
   r->add_option("--texture-mm-per-px", o->texture_mm_per_px,

@@ -128,6 +128,14 @@ expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern particles -o "$wo
 grep -q "another setup" "$work/out" && ok || fail "changed settings reused the map: $(cat "$work/out")"
 expect_ok "$glasspiv" render "$work/lens.yaml" --setup -o "$work/setup.png" --format 8 --background 1
 [ -s "$work/setup.png" ] && ok || fail "render --setup wrote nothing"
+cat "$work/lens.yaml" - >"$work/two.yaml" <<'YAML'
+  - name: side
+    model: {image_size_px: [80, 60], lens_model: pinhole, focal_length_px: [200, 200], principal_point_px: [39.5, 29.5]}
+    pose: {position_mm: [200, 0, -450], look_at_mm: [0, 0, 40], up: [0, 1, 0]}
+YAML
+expect_ok "$glasspiv" render "$work/two.yaml" --camera all --sheet-pattern grid -o "$work/two.tif" --map "$work/two.tmap"
+[ -s "$work/two_small.tif" ] && [ -s "$work/two_side.tif" ] && [ -s "$work/two_small.tmap" ] && [ -s "$work/two_side.tmap" ] \
+  && ok || fail "render --camera all did not write one image and map per camera"
 cp "$src/data/targets/charuco_11x8_15mm.yaml" "$work/board.yaml"
 sed 's/material: grey}/texture: board.yaml}/' "$work/lens.yaml" >"$work/board_scene.yaml"
 expect_ok "$glasspiv" render "$work/board_scene.yaml" --setup -o "$work/board.png" --format 8
