@@ -149,17 +149,22 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
   first.initial = true;
   stack.push_back(first);
 
-  auto push_child = [&](Branch&& child) {
-    if (!(child.weight > 0)) return;  // nothing to follow (R = 0 or R = 1 exactly)
-    if (child.depth > options.max_depth) {
+  // Whether a child of this weight and depth is followed; the bookkeeping of
+  // the ones that are not. Decided before the child is built, so cut branches
+  // cost no differentials.
+  auto admit = [&](double weight, int depth) {
+    if (!(weight > 0)) return false;  // nothing to follow (R = 0 or R = 1 exactly)
+    if (depth > options.max_depth) {
       ++result.counts.cut_by_depth;
-      result.cut_by_depth_weight += child.weight;
-    } else if (child.weight < options.min_weight) {
-      ++result.counts.cut_by_weight;
-      result.cut_by_weight_weight += child.weight;
-    } else {
-      stack.push_back(std::move(child));
+      result.cut_by_depth_weight += weight;
+      return false;
     }
+    if (weight < options.min_weight) {
+      ++result.counts.cut_by_weight;
+      result.cut_by_weight_weight += weight;
+      return false;
+    }
+    return true;
   };
 
   while (!stack.empty()) {
@@ -270,39 +275,41 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
     if (tir) ++result.counts.tir_events;
     const double reflectance = tir ? 1.0 : fr.unpolarized;
 
-    Branch child;
-    child.anchor = hit->point;
-    child.danchor = dpoint;
-    child.depth = b.depth + 1;
-    child.any_event = true;
+    auto child = [&]() -> Branch& {
+      Branch& c = stack.emplace_back();
+      c.anchor = hit->point;
+      c.danchor = dpoint;
+      c.depth = b.depth + 1;
+      c.any_event = true;
+      return c;
+    };
 
     // Reflected branch (pushed first, so that the refracted one is followed first).
     const double w_reflected = b.weight * reflectance;
+    const double w_refracted = b.weight - w_reflected;  // (1 - R) w, so that the two add up to w exactly
     if (!options.reflections) {
       if (w_reflected > 0) {
         ++result.counts.reflections_skipped;
         result.skipped_reflection_weight += w_reflected;
       }
-    } else if (w_reflected > 0) {
-      Branch r = child;
+    } else if (admit(w_reflected, b.depth + 1)) {
+      Branch& r = child();
       reflect_with_differential(b.direction, b.ddirection, normal, dnormal, &r.direction, &r.ddirection);
       r.origin = spawn_origin(*hit, r.direction, seg_medium == kFluid);
       r.weight = w_reflected;
       r.medium = seg_medium;
       r.any_reflection = true;
-      push_child(std::move(r));
     }
-    if (refracted) {
-      Branch t = std::move(child);
+    if (refracted && admit(w_refracted, b.depth + 1)) {
+      Branch& t = child();
       t.direction = *refracted;
       const Eigen::Vector3d facing = ndn < 0 ? normal : Eigen::Vector3d(-normal);
       const Diff dfacing = ndn < 0 ? dnormal : Diff(-dnormal);
       t.ddirection = refraction_differential(b.direction, b.ddirection, facing, dfacing, t.direction, n1 / n2);
       t.origin = spawn_origin(*hit, t.direction, other_medium == kFluid);
-      t.weight = b.weight - w_reflected;  // (1 - R) w, so that the two add up to w exactly
+      t.weight = w_refracted;
       t.medium = other_medium;
       t.any_reflection = b.any_reflection;
-      push_child(std::move(t));
     }
   }
 }
