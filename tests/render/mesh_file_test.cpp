@@ -17,6 +17,7 @@
 #include <string>
 
 #include "render/scene.h"
+#include "tests/render/test_meshes.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
@@ -25,47 +26,12 @@ namespace {
 namespace fs = std::filesystem;
 using Eigen::Vector3d;
 
-double volume(const MeshArrays& a) {  // divergence theorem: sum of signed tetrahedra
-  double v = 0;
-  for (const MeshTriangle& t : a.triangles)
-    v += a.vertices_mm[t[0]].dot(a.vertices_mm[t[1]].cross(a.vertices_mm[t[2]])) / 6;
-  return v;
-}
-
-// A sheared box: the surface of [0, 2]^3, 2 x 2 squares per face, each split in
-// two, mapped by (x, y, z) -> (x + z, 2 y, z): integer coordinates (exact in a
-// file's float), volume 2 * 8 = 16, outward winding.
+// A sheared box: the cube [0, 2]^3 (2 x 2 squares per face) mapped by
+// (x, y, z) -> (x + z, 2 y, z): integer coordinates (exact in a file's float),
+// volume 2 * 8 = 16, outward winding (the map keeps orientation: det 2).
 MeshArrays source() {
-  MeshArrays a;
-  std::map<std::array<int, 3>, std::uint32_t> index;
-  auto vertex = [&](std::array<int, 3> p) {
-    const auto it = index.find(p);
-    if (it != index.end()) return it->second;
-    a.vertices_mm.emplace_back(p[0] + p[2], 2 * p[1], p[2]);
-    return index[p] = static_cast<std::uint32_t>(a.vertices_mm.size() - 1);
-  };
-  const int n = 2;
-  for (int axis = 0; axis < 3; ++axis)
-    for (int side : {0, n}) {
-      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-          auto at = [&](int di, int dj) {
-            std::array<int, 3> p{};
-            p[axis] = side;
-            p[u] = i + di;
-            p[v] = j + dj;
-            return vertex(p);
-          };
-          MeshTriangle t1{at(0, 0), at(1, 0), at(1, 1)}, t2{at(0, 0), at(1, 1), at(0, 1)};
-          if (side == 0) {
-            std::swap(t1[1], t1[2]);
-            std::swap(t2[1], t2[2]);
-          }
-          a.triangles.push_back(t1);
-          a.triangles.push_back(t2);
-        }
-    }
+  MeshArrays a = grid_cube(2);
+  for (Vector3d& v : a.vertices_mm) v = Vector3d(v.x() + v.z(), 2 * v.y(), v.z());
   return a;
 }
 
@@ -176,7 +142,7 @@ class MeshFile : public ::testing::Test {
 
 TEST_F(MeshFile, StlObjPlyLoadAsTheSourceArrays) {
   const MeshArrays a = source();
-  const double v = volume(a);
+  const double v = signed_volume(a);
   ASSERT_NEAR(v, 16, 1e-12);
   for (const auto& [name, text] : std::map<std::string, std::string>{{"box.stl", ascii_stl(a)},
                                                                       {"binary.STL", binary_stl(a)},
@@ -194,7 +160,7 @@ TEST_F(MeshFile, StlObjPlyLoadAsTheSourceArrays) {
     EXPECT_TRUE(bounds_mm(m).min().isApprox(Vector3d(0, 0, 0)));
     EXPECT_TRUE(bounds_mm(m).max().isApprox(Vector3d(4, 4, 2)));
     const MeshArrays raw = read_mesh_arrays(path);
-    EXPECT_NEAR(std::fabs(volume(raw)), v, 1e-12 * v);
+    EXPECT_NEAR(std::fabs(signed_volume(raw)), v, 1e-12 * v);
   }
   // Quads are triangulated.
   for (const auto& [name, text] : std::map<std::string, std::string>{{"quads.obj", kQuadCubeObj}, {"quads.ply", kQuadCubePly}}) {

@@ -1,7 +1,10 @@
 #pragma once
-// Meshes the render tests share: an icosphere with exact radial normals.
+// Meshes the render tests share: an icosphere with exact radial normals and a
+// grid-tessellated cube with exact vertex coordinates.
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <cmath>
 #include <map>
 #include <utility>
@@ -57,6 +60,43 @@ inline MeshArrays icosphere(int level, double r = 20, const Eigen::Vector3d& c =
   a.triangles = tri;
   if (signed_volume(a) < 0)
     for (MeshTriangle& t : a.triangles) std::swap(t[1], t[2]);
+  return a;
+}
+
+// The surface of the cube [0, n]^3 as an n x n grid of squares per face, each
+// split into two triangles: every vertex and edge midpoint has exact (integer
+// or half-integer) coordinates.
+inline MeshArrays grid_cube(int n) {
+  MeshArrays a;
+  std::map<std::array<int, 3>, std::uint32_t> index;
+  auto vertex = [&](std::array<int, 3> p) {
+    const auto it = index.find(p);
+    if (it != index.end()) return it->second;
+    a.vertices_mm.emplace_back(p[0], p[1], p[2]);
+    return index[p] = static_cast<std::uint32_t>(a.vertices_mm.size() - 1);
+  };
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side : {0, n}) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;  // e_u x e_v = e_axis
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          auto at = [&](int di, int dj) {
+            std::array<int, 3> p{};
+            p[axis] = side;
+            p[u] = i + di;
+            p[v] = j + dj;
+            return vertex(p);
+          };
+          const std::uint32_t p00 = at(0, 0), p10 = at(1, 0), p11 = at(1, 1), p01 = at(0, 1);
+          // Alternate the diagonal so vertices have 4, 6 and 8 triangles around them.
+          std::array<MeshTriangle, 2> two = (i + j) % 2 ? std::array<MeshTriangle, 2>{{{p00, p10, p11}, {p00, p11, p01}}}
+                                                        : std::array<MeshTriangle, 2>{{{p00, p10, p01}, {p10, p11, p01}}};
+          for (MeshTriangle t : two) {
+            if (side == 0) std::swap(t[1], t[2]);  // outward is -axis there
+            a.triangles.push_back(t);
+          }
+        }
+    }
   return a;
 }
 

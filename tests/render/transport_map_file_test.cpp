@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include "render/transport_map_file.h"
+#include "tests/render/test_maps.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
@@ -155,26 +156,8 @@ TransportMap map_with_footprint(const Inputs& in) {
   return map;
 }
 
-template <typename T>
-bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-
 void expect_identical(const TransportMap& a, const TransportMap& b) {
-  EXPECT_EQ(a.width, b.width);
-  EXPECT_EQ(a.height, b.height);
-  EXPECT_EQ(a.samples_per_axis, b.samples_per_axis);
-  EXPECT_TRUE(same_bits(a.pixel_offsets, b.pixel_offsets));
-  EXPECT_TRUE(same_bits(a.s_mm, b.s_mm));
-  EXPECT_TRUE(same_bits(a.t_mm, b.t_mm));
-  EXPECT_TRUE(same_bits(a.weight, b.weight));
-  EXPECT_TRUE(same_bits(a.tag, b.tag));
-  EXPECT_TRUE(same_bits(a.ds_dcol, b.ds_dcol));
-  EXPECT_TRUE(same_bits(a.ds_drow, b.ds_drow));
-  EXPECT_TRUE(same_bits(a.dt_dcol, b.dt_dcol));
-  EXPECT_TRUE(same_bits(a.dt_drow, b.dt_drow));
-  EXPECT_TRUE(same_bits(a.background_weight, b.background_weight));
-  EXPECT_TRUE(same_bits(a.opaque_weight, b.opaque_weight));
+  expect_same_map_arrays(a, b);
   EXPECT_EQ(a.stats.camera_rays, b.stats.camera_rays);
   EXPECT_EQ(a.stats.branches_traced, b.stats.branches_traced);
   EXPECT_EQ(a.stats.crossings, b.stats.crossings);

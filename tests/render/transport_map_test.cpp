@@ -13,6 +13,7 @@
 #include "render/scene_yaml.h"
 #include "render/trace_scene_builder.h"
 #include "render/transport_map.h"
+#include "tests/render/test_maps.h"
 
 namespace glasspiv {
 namespace {
@@ -173,16 +174,7 @@ TEST(TransportMap, DeterministicOverThreadCounts) {
   const TransportMap b = build_transport_map(scene, pinhole(), RigidTransform{}, options, 2, 2);
   EXPECT_EQ(a.stats.threads, 1);
   EXPECT_EQ(b.stats.threads, 2);
-  auto same = [](const auto& x, const auto& y) {
-    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0;
-  };
-  EXPECT_TRUE(same(a.pixel_offsets, b.pixel_offsets));
-  EXPECT_TRUE(same(a.s_mm, b.s_mm));
-  EXPECT_TRUE(same(a.t_mm, b.t_mm));
-  EXPECT_TRUE(same(a.weight, b.weight));
-  EXPECT_TRUE(same(a.tag, b.tag));
-  EXPECT_TRUE(same(a.background_weight, b.background_weight));
-  EXPECT_TRUE(same(a.opaque_weight, b.opaque_weight));
+  expect_same_map_arrays(a, b);
   EXPECT_EQ(a.stats.branches_traced, b.stats.branches_traced);
   EXPECT_GT(a.crossing_count(), a.pixel_count());
 }
