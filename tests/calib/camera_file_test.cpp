@@ -25,6 +25,7 @@
 #include "calib/io/mrcal_cameramodel.h"
 #include "calib/io/opencv_yaml.h"
 #include "util/atomic_file.h"
+#include "tests/python_mrcal.h"
 #include "util/input_error.h"
 
 extern "C" {
@@ -477,18 +478,6 @@ quoted 'string' ''',
   EXPECT_FALSE(camera.camera_from_world.has_value());
 }
 
-// Python's mrcal, when installed, loads what we write and writes what we load.
-std::string python_with_mrcal() {
-  std::vector<std::string> candidates;
-  if (const char* env = std::getenv("GLASSPIV_PYTHON")) candidates.emplace_back(env);
-  // Debian's python3-mrcal is installed for the system interpreter, which a
-  // python3 earlier on PATH (a virtualenv, pyenv) may hide.
-  candidates.insert(candidates.end(), {"python3", "/usr/bin/python3"});
-  for (const std::string& python : candidates)
-    if (std::system(("'" + python + "' -c 'import mrcal' >/dev/null 2>&1").c_str()) == 0) return python;
-  return "";
-}
-
 std::vector<Eigen::Vector2d> read_pixels(const std::string& path) {
   std::vector<Eigen::Vector2d> pixels;
   std::ifstream in(path);
@@ -498,7 +487,7 @@ std::vector<Eigen::Vector2d> read_pixels(const std::string& path) {
 }
 
 TEST_F(CameraFileTest, MrcalPythonAgreesOnProjections) {
-  const std::string python = python_with_mrcal();
+  const std::string python = testing::python_with_mrcal();
   if (python.empty()) GTEST_SKIP() << "python3 with mrcal (python3-mrcal) is not installed";
 
   Camera wide = read_camera(kDataDir + "wide_opencv8.yaml");

@@ -11,6 +11,7 @@
 
 #include "targets/observations_io.h"
 #include "util/atomic_file.h"
+#include "tests/python_mrcal.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
@@ -224,19 +225,8 @@ TEST(MrcalVnl, RejectsWhatMrcalCannotRead) {
   }
 }
 
-// Debian's python3-mrcal is installed for the system interpreter, which a
-// python3 earlier on PATH (pyenv, a virtualenv) may hide; GLASSPIV_PYTHON first.
-std::string python_with_mrcal() {
-  std::vector<std::string> candidates;
-  if (const char* env = std::getenv("GLASSPIV_PYTHON")) candidates.emplace_back(env);
-  candidates.insert(candidates.end(), {"python3", "/usr/bin/python3"});
-  for (const std::string& python : candidates)
-    if (std::system(("'" + python + "' -c 'import mrcal' >/dev/null 2>&1").c_str()) == 0) return python;
-  return "";
-}
-
 TEST(MrcalVnl, MrcalReadsIt) {
-  const std::string python = python_with_mrcal();
+  const std::string python = testing::python_with_mrcal();
   if (python.empty()) GTEST_SKIP() << "python3 with mrcal (python3-mrcal) is not installed";
   const fs::path dir = fs::temp_directory_path() / "glasspiv_targets_vnl_test";
   fs::create_directories(dir);

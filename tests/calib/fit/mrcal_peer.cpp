@@ -7,15 +7,6 @@
 
 namespace glasspiv::testing {
 
-std::string python_with_mrcal() {
-  std::vector<std::string> candidates;
-  if (const char* env = std::getenv("GLASSPIV_PYTHON")) candidates.emplace_back(env);
-  candidates.insert(candidates.end(), {"python3", "/usr/bin/python3"});
-  for (const std::string& python : candidates)
-    if (std::system(("'" + python + "' -c 'import mrcal' >/dev/null 2>&1").c_str()) == 0) return python;
-  return "";
-}
-
 std::optional<MrcalFit> run_mrcal_fit(const Observations& observations, const SyntheticBoard& board,
                                       LensModel lens_model, double focal_estimate_px, const std::string& work_dir,
                                       const std::string& source_dir, std::string* error) {

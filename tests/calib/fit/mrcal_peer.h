@@ -8,12 +8,9 @@
 #include "calib/camera_model.h"
 #include "calib/observations.h"
 #include "synthetic_views.h"
+#include "tests/python_mrcal.h"
 
 namespace glasspiv::testing {
-
-// A python interpreter that imports mrcal ($GLASSPIV_PYTHON, python3,
-// /usr/bin/python3: Debian's python3-mrcal is for the system interpreter), or "".
-std::string python_with_mrcal();
 
 struct MrcalFit {
   CameraModel camera;
