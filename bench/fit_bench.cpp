@@ -161,9 +161,8 @@ int main(int argc, char** argv) {
       "|---------|----------------------------------------------------------------|-------------|-------:|"
       "----------:|-------------|---------:|----------:|\n");
   const Lens lenses[] = {
-      {"opencv5", CameraModel(2048, 1536, 2400, 2401.5, 1030.25, 760.75, {-0.2, 0.1, 1e-4, -1.2e-4, -0.02})},
-      {"opencv8",
-       CameraModel(2560, 1600, 1500, 1501, 1275.5, 805.25, {-0.25, 0.08, 3e-4, -2e-4, -0.01, 0.15, -0.02, 0.005})},
+      {"opencv5", testing::truth_opencv5()},
+      {"opencv8", testing::truth_opencv8()},
   };
   for (const Lens& lens : lenses) bench_lens(lens, runs);
   return 0;

@@ -20,17 +20,12 @@ namespace {
 
 using testing::observe;
 using testing::plan_views;
+using testing::truth_opencv5;
+using testing::truth_opencv8;
 using testing::SyntheticBoard;
 using testing::ViewPlan;
 
 constexpr double kNoisePx = 0.1;
-
-CameraModel truth_opencv5() {
-  return CameraModel(2048, 1536, 2400, 2401.5, 1030.25, 760.75, {-0.2, 0.1, 1e-4, -1.2e-4, -0.02});
-}
-CameraModel strong_opencv8() {
-  return CameraModel(2560, 1600, 1500, 1501, 1275.5, 805.25, {-0.25, 0.08, 3e-4, -2e-4, -0.01, 0.15, -0.02, 0.005});
-}
 
 TEST(CalibrationDiagnostics, CoverageCountsEveryCorner) {
   const CameraModel truth = truth_opencv5();
@@ -46,7 +41,7 @@ TEST(CalibrationDiagnostics, CoverageCountsEveryCorner) {
 
 TEST(CalibrationDiagnostics, ResidualFieldShowsAPoorModel) {
   std::mt19937 rng(22);
-  const CameraModel truth = strong_opencv8();
+  const CameraModel truth = truth_opencv8();
   const Observations obs = observe(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng);
 
   IntrinsicFitOptions right;
@@ -162,7 +157,7 @@ TEST(CalibrationDiagnostics, CrossValidationSeparatesRightAndWrongModels) {
     EXPECT_LT(cv.ratio, 3.0);
   }
   {
-    const CameraModel truth = strong_opencv8();
+    const CameraModel truth = truth_opencv8();
     std::mt19937 rng(26);
     const Observations obs = observe(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng);
     IntrinsicFitOptions options;

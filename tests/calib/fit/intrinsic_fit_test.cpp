@@ -32,19 +32,12 @@ namespace {
 
 using testing::observe;
 using testing::plan_views;
+using testing::truth_opencv5;
+using testing::truth_opencv8;
 using testing::SyntheticBoard;
 using testing::ViewPlan;
 
 constexpr double kNoisePx = 0.1;
-
-// The brief's camera: 2048 x 1536, fx ~ 2400, a mild OpenCV5 lens.
-CameraModel truth_opencv5() {
-  return CameraModel(2048, 1536, 2400, 2401.5, 1030.25, 760.75, {-0.2, 0.1, 1e-4, -1.2e-4, -0.02});
-}
-// A strong rational lens (the bench's opencv8 lens at a shorter focal length).
-CameraModel truth_opencv8() {
-  return CameraModel(2560, 1600, 1500, 1501, 1275.5, 805.25, {-0.25, 0.08, 3e-4, -2e-4, -0.01, 0.15, -0.02, 0.005});
-}
 
 Observations make_views(const CameraModel& camera, const ViewPlan& plan, double noise_px, unsigned seed,
                         const SyntheticBoard& board = {}) {
