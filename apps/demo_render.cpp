@@ -1,6 +1,5 @@
 #include "apps/demo_render.h"
 
-#include <chrono>
 #include <filesystem>
 
 #include "apps/render_scene.h"
@@ -10,23 +9,9 @@
 #include "render/transport_map_file.h"
 #include "util/image_file.h"
 #include "util/progress_bar.h"
+#include "util/stopwatch.h"
 
 namespace glasspiv {
-
-namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-std::function<void(int, int)> progress_of(ProgressBar* bar) {
-  return [bar, last = 0](int done, int) mutable {
-    bar->advance(static_cast<std::size_t>(done - last));
-    last = done;
-  };
-}
-
-}  // namespace
 
 DemoRenderSummary run_render_demo(const std::string& folder, const std::string& scene_path, int binning) {
   namespace fs = std::filesystem;
@@ -43,20 +28,20 @@ DemoRenderSummary run_render_demo(const std::string& folder, const std::string& 
   s.height = model.height_px();
   s.map_file = (out / "reactor.tmap").string();
   const std::uint64_t fingerprint = transport_map_fingerprint(ps.trace, model, pose, options, 1);
-  auto t0 = std::chrono::steady_clock::now();
+  Stopwatch clock;
   {
     ProgressBar bar("trace map", static_cast<std::size_t>(model.height_px()));
-    const TransportMap traced = build_transport_map(ps.trace, model, pose, options, 1, 0, progress_of(&bar));
+    const TransportMap traced = build_transport_map(ps.trace, model, pose, options, 1, 0, [&bar](int done, int) { bar.set_done(static_cast<std::size_t>(done)); });
     bar.finish();
-    s.trace_seconds = seconds_since(t0);
+    s.trace_seconds = clock.seconds();
     s.crossings_per_pixel = double(traced.crossing_count()) / traced.pixel_count();
     s.closed_form_fraction = double(traced.stats.closed_form_rays) / traced.stats.camera_rays;
     write_transport_map(s.map_file, traced, fingerprint);
   }
   // What every later image of a series does: load the cached map.
-  t0 = std::chrono::steady_clock::now();
+  clock.restart();
   const std::optional<TransportMap> map = load_cached_transport_map(s.map_file, fingerprint);
-  s.reload_seconds = seconds_since(t0);
+  s.reload_seconds = clock.seconds();
   s.cache_reused = map.has_value();
   if (!map) throw std::runtime_error("demo: the transport map just written does not load");
 
@@ -65,25 +50,25 @@ DemoRenderSummary run_render_demo(const std::string& folder, const std::string& 
   const SheetPicture particles = particle_picture(sheet.extent_s_mm, sheet.extent_t_mm, 1.0, 0.3, 0.075, 1);
   const SheetTexture checker_texture(checker.values.data(), checker.rows, checker.cols, checker.mm_per_texel);
   const SheetTexture particle_texture(particles.values.data(), particles.rows, particles.cols, particles.mm_per_texel);
-  t0 = std::chrono::steady_clock::now();
+  clock.restart();
   const std::vector<float> checker_image = forward_render_values(*map, checker_texture);
   const std::vector<float> particle_image = forward_render_values(*map, particle_texture);
-  s.render_seconds = seconds_since(t0) / 2;
+  s.render_seconds = clock.seconds() / 2;
   s.checkerboard_png = (out / "reactor_checkerboard.png").string();
   s.particles_tif = (out / "reactor_particles.tif").string();
   write_gray_image(s.checkerboard_png, checker_image.data(), s.width, s.height, PixelFormat::uint8);
   write_gray_image(s.particles_tif, particle_image.data(), s.width, s.height, PixelFormat::uint16);
 
-  t0 = std::chrono::steady_clock::now();
+  clock.restart();
   SetupLook look;
   look.background_radiance = 1;  // a lit backdrop shows the glass's edges
   look.textures = ps.textures_by_solid();
   std::vector<float> setup;
   {
     ProgressBar bar("render setup", static_cast<std::size_t>(model.height_px()));
-    setup = render_setup(ps.trace, look, model, pose, options, 2, 0, progress_of(&bar));
+    setup = render_setup(ps.trace, look, model, pose, options, 2, 0, [&bar](int done, int) { bar.set_done(static_cast<std::size_t>(done)); });
   }
-  s.setup_seconds = seconds_since(t0);
+  s.setup_seconds = clock.seconds();
   s.setup_png = (out / "reactor_setup.png").string();
   write_gray_image(s.setup_png, setup.data(), s.width, s.height, PixelFormat::uint8);
   return s;

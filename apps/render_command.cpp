@@ -1,6 +1,5 @@
 // glasspiv render: the image a scene camera records of a textured light sheet
 // (through the transport map, cached on request), or the setup itself.
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -18,6 +17,7 @@
 #include "util/image_file.h"
 #include "util/input_error.h"
 #include "util/progress_bar.h"
+#include "util/stopwatch.h"
 
 namespace glasspiv {
 namespace {
@@ -30,10 +30,6 @@ struct RenderOptions {
   int max_depth = TraceOptions{}.max_depth, samples = 0, threads = 0, binning = 1;
   std::uint64_t seed = 1;
 };
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // The picture on the sheet: an image file, or a built-in pattern over the sheet's extent.
 SheetTexture sheet_picture(const RenderOptions& o, const SheetPlane& sheet) {
@@ -54,13 +50,6 @@ SheetTexture sheet_picture(const RenderOptions& o, const SheetPlane& sheet) {
                          o.particle_diameter_mm / 4, o.seed);
   }
   return SheetTexture(p.values.data(), p.rows, p.cols, p.mm_per_texel);
-}
-
-std::function<void(int, int)> progress_of(ProgressBar* bar) {
-  return [bar, last = 0](int done, int) mutable {
-    bar->advance(static_cast<std::size_t>(done - last));
-    last = done;
-  };
 }
 
 // path with "_<name>" before its extension: out.tif -> out_cam0.tif.
@@ -114,7 +103,7 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
               ps.camera_name().c_str(), camera.model.width_px(), camera.model.height_px());
 
   std::vector<float> image;
-  const auto t0 = std::chrono::steady_clock::now();
+  const Stopwatch clock;
   if (o.setup) {
     const int samples = o.samples > 0 ? o.samples : 2;
     const std::vector<const SheetTexture*> textures = ps.textures_by_solid();
@@ -124,12 +113,12 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
     SetupRenderStats stats;
     {
       ProgressBar bar("render setup", static_cast<std::size_t>(camera.model.height_px()));
-      image = render_setup(ps.trace, look, camera.model, pose, options, samples, o.threads, progress_of(&bar), &stats);
+      image = render_setup(ps.trace, look, camera.model, pose, options, samples, o.threads, [&bar](int done, int) { bar.set_done(static_cast<std::size_t>(done)); }, &stats);
     }
     std::printf("traced the setup: %ld camera rays (%d x %d per pixel), %.1f branches per ray, %ld rays met no "
                 "solid (closed form), %.2f s on %d threads\n",
                 stats.camera_rays, samples, samples, double(stats.branches_traced) / std::max(1L, stats.camera_rays),
-                stats.closed_form_rays, seconds_since(t0), stats.threads);
+                stats.closed_form_rays, clock.seconds(), stats.threads);
   } else {
     const int samples = o.samples > 0 ? o.samples : 1;
     const std::uint64_t fingerprint = transport_map_fingerprint(ps.trace, camera.model, pose, options, samples);
@@ -145,13 +134,13 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
     }
     if (!map) {
       ProgressBar bar("trace map", static_cast<std::size_t>(camera.model.height_px()));
-      map = build_transport_map(ps.trace, camera.model, pose, options, samples, o.threads, progress_of(&bar));
+      map = build_transport_map(ps.trace, camera.model, pose, options, samples, o.threads, [&bar](int done, int) { bar.set_done(static_cast<std::size_t>(done)); });
       bar.finish();
       const TransportStats& st = map->stats;
       std::printf("traced: %ld camera rays, %ld branches (%.1f per ray), %zu sheet crossings (%.2f per pixel), "
                   "%.2f s on %d threads\n",
                   st.camera_rays, st.branches_traced, double(st.branches_traced) / std::max(1L, st.camera_rays),
-                  map->crossing_count(), double(map->crossing_count()) / map->pixel_count(), seconds_since(t0),
+                  map->crossing_count(), double(map->crossing_count()) / map->pixel_count(), clock.seconds(),
                   st.threads);
       std::printf("skipped: %ld rays met no solid (closed form), %ld branches below min_weight, %ld beyond max_depth, "
                   "%ld reflections not spawned; weight not followed %.3g of a pixel on average\n",

@@ -6,7 +6,6 @@
 // the view is the real camera's, at 1 megapixel. Every pixel is traced.
 #include <sys/resource.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -21,14 +20,11 @@
 #include "render/trace_scene_builder.h"
 #include "render/transport_map.h"
 #include "util/image_file.h"
+#include "util/stopwatch.h"
 
 using namespace glasspiv;
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 double peak_rss_mib() {
   rusage u{};
@@ -95,9 +91,9 @@ int main(int argc, char** argv) {
     TraceOptions options;
     options.reflections = s.reflections;
     options.min_weight = s.min_weight;
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     const TransportMap map = build_transport_map(ts, cam, pose, options, 1, threads);
-    const double t = seconds_since(t0);
+    const double t = clock.seconds();
     std::printf("| %s | %.3f | %.3g | %.2f | %.3f | %.1f %% | %.1f |\n", s.name, t / (map.pixel_count() / 1e6),
                 map.stats.camera_rays / t, double(map.stats.branches_traced) / map.stats.camera_rays,
                 double(map.crossing_count()) / map.pixel_count(),
@@ -155,9 +151,9 @@ int main(int argc, char** argv) {
     TraceOptions options;
     options.min_weight = r.min_weight;
     options.reflections = r.reflections;
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     const TransportMap map = build_transport_map(ts, tcam, pose, options, r.k, threads);
-    r.seconds = seconds_since(t0);
+    r.seconds = clock.seconds();
     r.crossings_per_px = double(map.crossing_count()) / map.pixel_count();
     r.rms_filtered = rms_difference(forward_render_values(map, tex), ref);
     r.rms_point = rms_difference(point_sampled(map, tex), ref);

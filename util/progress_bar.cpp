@@ -21,6 +21,11 @@ void ProgressBar::advance(std::size_t steps) {
   draw(false);
 }
 
+void ProgressBar::set_done(std::size_t done) {
+  done_ = done;
+  draw(false);
+}
+
 void ProgressBar::finish() {
   if (finished_) return;
   finished_ = true;

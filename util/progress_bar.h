@@ -12,6 +12,8 @@ class ProgressBar {
   ProgressBar(std::string label, std::size_t total);
   ~ProgressBar();
   void advance(std::size_t steps = 1);
+  // Absolute progress, for work that reports how much is done so far.
+  void set_done(std::size_t done);
   void finish();
 
  private:

@@ -1,7 +1,6 @@
 #include "calib/fit/intrinsic_fit.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -16,13 +15,10 @@
 
 #include "calib/fit/reprojection_cost.h"
 #include "util/input_error.h"
+#include "util/stopwatch.h"
 
 namespace glasspiv {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 std::string format_number(const char* format, double value) {
   char buffer[64];
@@ -195,7 +191,7 @@ std::string intrinsic_name(int index) {
 }
 
 IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFitOptions& options) {
-  const Clock::time_point start = Clock::now();
+  const Stopwatch clock;
   validate(observations);
   const int width = observations.image_width_px, height = observations.image_height_px;
   const int distortion_count = static_cast<int>(options.lens_model);
@@ -575,7 +571,7 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
   }
   for (std::size_t v = 0; v < view_sum.size(); ++v)
     if (view_count[v] > 0) fit.view_rms_px[v] = std::sqrt(view_sum[v] / view_count[v]);
-  fit.total_time_s = seconds_since(start);
+  fit.total_time_s = clock.seconds();
   return fit;
 }
 

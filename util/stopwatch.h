@@ -1,0 +1,17 @@
+#pragma once
+// Wall-clock time of a step, for the figures commands and reports print.
+#include <chrono>
+
+namespace glasspiv {
+
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  void restart() { start_ = std::chrono::steady_clock::now(); }
+  double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace glasspiv
