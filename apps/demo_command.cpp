@@ -140,9 +140,10 @@ void run_demo(const std::string& out_dir) {
               "binned %dx%d:\n", kBinning, kBinning);
   const DemoRenderSummary render =
       run_render_demo((out / "render").string(), (scenes_dir / "reactor.yaml").string(), kBinning);
-  std::printf("   transport map %dx%d traced in %.2f s (%.2f sheet crossings per pixel; %.0f%% of the rays met no "
+  std::printf("   transport map %dx%d %s in %.2f s (%.2f sheet crossings per pixel; %.0f%% of the rays met no "
               "glass and took the closed form), saved to %s\n",
-              render.width, render.height, render.trace_seconds, render.crossings_per_pixel,
+              render.width, render.height, render.map_from_earlier_run ? "reused from an earlier run" : "traced",
+              render.trace_seconds, render.crossings_per_pixel,
               100 * render.closed_form_fraction, render.map_file.c_str());
   std::printf("   reloaded from the cache in %.3f s; each image then renders in %.3f s\n", render.reload_seconds,
               render.render_seconds);

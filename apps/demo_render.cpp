@@ -6,7 +6,7 @@
 #include "render/forward_render.h"
 #include "render/setup_render.h"
 #include "render/sheet_pattern.h"
-#include "render/transport_map_file.h"
+#include "render/transport_map_cache.h"
 #include "util/image_file.h"
 #include "util/progress_bar.h"
 #include "util/stopwatch.h"
@@ -27,23 +27,28 @@ DemoRenderSummary run_render_demo(const std::string& folder, const std::string& 
   s.width = model.width_px();
   s.height = model.height_px();
   s.map_file = (out / "reactor.tmap").string();
-  const std::uint64_t fingerprint = transport_map_fingerprint(ps.trace, model, pose, options, 1);
-  Stopwatch clock;
+  auto traced = [&](const char* label) {
+    ProgressBar bar(label, static_cast<std::size_t>(model.height_px()));
+    CachedTransportMap c = load_or_build_transport_map(ps.trace, model, pose, options, 1, s.map_file, 0,
+                                                       [&bar](int done, int) { bar.set_done(static_cast<std::size_t>(done)); });
+    if (!c.reused) bar.finish();
+    return c;
+  };
   {
-    ProgressBar bar("trace map", static_cast<std::size_t>(model.height_px()));
-    const TransportMap traced = build_transport_map(ps.trace, model, pose, options, 1, 0, [&bar](int done, int) { bar.set_done(static_cast<std::size_t>(done)); });
-    bar.finish();
-    s.trace_seconds = clock.seconds();
-    s.crossings_per_pixel = double(traced.crossing_count()) / traced.pixel_count();
-    s.closed_form_fraction = double(traced.stats.closed_form_rays) / traced.stats.camera_rays;
-    write_transport_map(s.map_file, traced, fingerprint);
+    const CachedTransportMap first = traced("trace map");
+    s.trace_seconds = first.seconds;
+    s.map_from_earlier_run = first.reused;
+    s.crossings_per_pixel = double(first.map.crossing_count()) / first.map.pixel_count();
+    s.closed_form_fraction =
+        double(first.map.stats.closed_form_rays) / std::max(1L, first.map.stats.camera_rays);
   }
   // What every later image of a series does: load the cached map.
-  clock.restart();
-  const std::optional<TransportMap> map = load_cached_transport_map(s.map_file, fingerprint);
-  s.reload_seconds = clock.seconds();
-  s.cache_reused = map.has_value();
-  if (!map) throw std::runtime_error("demo: the transport map just written does not load");
+  const CachedTransportMap again = traced("load map");
+  s.reload_seconds = again.seconds;
+  s.cache_reused = again.reused;
+  if (!again.reused) throw std::runtime_error("demo: the transport map just written does not load");
+  const TransportMap* map = &again.map;
+  Stopwatch clock;
 
   const SheetPlane& sheet = ps.trace.sheet;
   const SheetPicture checker = checkerboard_picture(sheet.extent_s_mm, sheet.extent_t_mm, 5.0);

@@ -12,6 +12,7 @@ struct DemoRenderSummary {
   double trace_seconds = 0, reload_seconds = 0, render_seconds = 0, setup_seconds = 0;
   double crossings_per_pixel = 0, closed_form_fraction = 0;
   bool cache_reused = false;
+  bool map_from_earlier_run = false;  // the first load found a valid map of an earlier demo run
   std::string checkerboard_png, particles_tif, setup_png, map_file;
 };
 

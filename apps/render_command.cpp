@@ -13,6 +13,7 @@
 #include "render/setup_render.h"
 #include "render/sheet_pattern.h"
 #include "render/scene_yaml.h"
+#include "render/transport_map_cache.h"
 #include "render/transport_map_file.h"
 #include "util/image_file.h"
 #include "util/input_error.h"
@@ -121,43 +122,39 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
                 stats.closed_form_rays, clock.seconds(), stats.threads);
   } else {
     const int samples = o.samples > 0 ? o.samples : 1;
-    const std::uint64_t fingerprint = transport_map_fingerprint(ps.trace, camera.model, pose, options, samples);
-    std::optional<TransportMap> map;
-    if (!map_path.empty()) {
-      std::string why;
-      map = load_cached_transport_map(map_path, fingerprint, &why);
-      if (map)
-        std::printf("reused the transport map %s (fingerprint %s): nothing re-traced\n", map_path.c_str(),
-                    fingerprint_hex(fingerprint).c_str());
-      else
-        std::printf("tracing a new transport map (cache %s: %s)\n", map_path.c_str(), why.c_str());
-    }
-    if (!map) {
+    CachedTransportMap cached;
+    {
       ProgressBar bar("trace map", static_cast<std::size_t>(camera.model.height_px()));
-      map = build_transport_map(ps.trace, camera.model, pose, options, samples, o.threads, [&bar](int done, int) { bar.set_done(static_cast<std::size_t>(done)); });
-      bar.finish();
-      const TransportStats& st = map->stats;
+      cached = load_or_build_transport_map(ps.trace, camera.model, pose, options, samples, map_path, o.threads,
+                                           [&bar](int done, int) { bar.set_done(static_cast<std::size_t>(done)); });
+      if (!cached.reused) bar.finish();
+    }
+    const TransportMap& map = cached.map;
+    if (cached.reused) {
+      std::printf("reused the transport map %s (fingerprint %s): nothing re-traced\n", map_path.c_str(),
+                  fingerprint_hex(cached.fingerprint).c_str());
+    } else {
+      if (!map_path.empty()) std::printf("traced a new transport map (cache %s: %s)\n", map_path.c_str(), cached.why_traced.c_str());
+      const TransportStats& st = map.stats;
       std::printf("traced: %ld camera rays, %ld branches (%.1f per ray), %zu sheet crossings (%.2f per pixel), "
                   "%.2f s on %d threads\n",
                   st.camera_rays, st.branches_traced, double(st.branches_traced) / std::max(1L, st.camera_rays),
-                  map->crossing_count(), double(map->crossing_count()) / map->pixel_count(), clock.seconds(),
+                  map.crossing_count(), double(map.crossing_count()) / map.pixel_count(), cached.seconds,
                   st.threads);
       std::printf("skipped: %ld rays met no solid (closed form), %ld branches below min_weight, %ld beyond max_depth, "
                   "%ld reflections not spawned; weight not followed %.3g of a pixel on average\n",
                   st.closed_form_rays, st.branches_cut_by_weight, st.branches_cut_by_depth, st.reflections_skipped,
-                  st.cut_weight / map->pixel_count());
-      if (map->crossing_count() == 0)
-        throw InputError(o.scene, ps.camera_field(),
-                         fmt::format("camera '{}' sees none of the sheet: check its pose and the sheet's extent",
-                                     ps.camera_name()));
-      if (!map_path.empty()) {
-        write_transport_map(map_path, *map, fingerprint);
+                  st.cut_weight / map.pixel_count());
+      if (cached.written)
         std::printf("wrote the transport map %s (%.1f MiB, fingerprint %s)\n", map_path.c_str(),
-                    map->memory_bytes() / 1048576.0, fingerprint_hex(fingerprint).c_str());
-      }
+                    map.memory_bytes() / 1048576.0, fingerprint_hex(cached.fingerprint).c_str());
     }
+    if (map.crossing_count() == 0)
+      throw InputError(o.scene, ps.camera_field(),
+                       fmt::format("camera '{}' sees none of the sheet: check its pose and the sheet's extent",
+                                   ps.camera_name()));
     const SheetTexture texture = sheet_picture(o, ps.trace.sheet);
-    image = forward_render_values(*map, texture, o.background >= 0 ? o.background : ps.scene.background.radiance);
+    image = forward_render_values(map, texture, o.background >= 0 ? o.background : ps.scene.background.radiance);
   }
   if (o.gain != 1)
     for (float& v : image) v = static_cast<float>(v * o.gain);

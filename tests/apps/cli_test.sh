@@ -121,7 +121,7 @@ cameras:
 YAML
 expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/lens.tif" --map "$work/lens.tmap"
 [ -s "$work/lens.tif" ] && [ -s "$work/lens.tmap" ] && ok || fail "render wrote no image or map"
-grep -q "tracing a new transport map" "$work/out" && ok || fail "first render did not trace: $(cat "$work/out")"
+grep -q "traced a new transport map" "$work/out" && ok || fail "first render did not trace: $(cat "$work/out")"
 expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-texture "$work/lens.tif" -o "$work/lens2.exr" --map "$work/lens.tmap"
 grep -q "nothing re-traced" "$work/out" && ok || fail "second render re-traced: $(cat "$work/out")"
 expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern particles -o "$work/lens3.png" --map "$work/lens.tmap" --no-reflections
