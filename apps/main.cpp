@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   glasspiv::register_target_commands(app);
   glasspiv::register_calib_commands(app);
   glasspiv::register_render_command(app);
+  glasspiv::register_correct_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -93,8 +93,11 @@ CorrectionOperator build_correction_operator(const TransportMap& map, const Shee
             const double la = std::hypot(ax, ay), lb = std::hypot(bx, by);
             int na = 1, nb = 1;
             if (options.footprint_filter && std::isfinite(la) && std::isfinite(lb)) {
-              na = std::clamp(static_cast<int>(std::ceil(la)), 1, max_taps);
-              nb = std::clamp(static_cast<int>(std::ceil(lb)), 1, max_taps);
+              const int cap = options.taps_by_weight
+                                  ? std::clamp(static_cast<int>(std::ceil(max_taps * std::sqrt(std::max(0.0, w)))), 1, max_taps)
+                                  : max_taps;
+              na = std::clamp(static_cast<int>(std::ceil(la)), 1, cap);
+              nb = std::clamp(static_cast<int>(std::ceil(lb)), 1, cap);
             }
             const double share = 1.0 / (na * nb);
             for (int j = 0; j < nb; ++j) {

@@ -33,6 +33,13 @@ struct OperatorOptions {
   // footprint longer than 2x this many cells is sampled with gaps between taps
   // (only the rims, which the masks reject, are that squeezed).
   int max_taps_per_axis = 16;
+  // Taps follow the light: a crossing of weight w gets at most
+  // ceil(max_taps_per_axis * sqrt(w)) taps per axis. Reflected ghosts (w of a
+  // few per cent) are minified and spread over hundreds of cells: at full tap
+  // count they hold 90 % of the entries for 4 % of the light. Their footprint
+  // mean is then sampled more coarsely (bench/RESULTS.md has the error); false
+  // spends the full tap count on every crossing.
+  bool taps_by_weight = true;
 };
 
 struct CorrectionOperator {

@@ -207,6 +207,7 @@ std::uint64_t correction_operator_fingerprint(std::uint64_t transport_map_finger
   h.f64(grid.t0_mm);
   h.boolean(options.footprint_filter);
   h.i32(options.max_taps_per_axis);
+  h.boolean(options.taps_by_weight);
   return h.value();
 }
 

@@ -176,6 +176,18 @@ GrayImage read_gray_image(const std::string& path) {
   return image;
 }
 
+std::optional<std::array<int, 2>> image_file_size(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return std::nullopt;
+  const auto in = OIIO::ImageInput::open(path);
+  if (!in) {
+    OIIO::geterror();  // clear it
+    return std::nullopt;
+  }
+  const OIIO::ImageSpec& spec = in->spec();
+  return std::array<int, 2>{spec.width, spec.height};
+}
+
 void write_gray_image(const std::string& path, const float* values, int width, int height,
                       PixelFormat format) {
   if (values == nullptr || width <= 0 || height <= 0)

@@ -4,6 +4,8 @@
 // Only I/O: no resampling, no colour management. Writes are atomic
 // (util/atomic_file.h). Bad files and unwritable outputs throw InputError
 // naming the file; see docs/formats.md, "Images".
+#include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +25,12 @@ struct GrayImage {  // single channel, row-major
 // Rec.601 luma 0.299 R + 0.587 G + 0.114 B (as OpenCV's cvtColor), gray+alpha
 // takes the gray channel; alpha is ignored.
 GrayImage read_gray_image(const std::string& path);
+
+// Width and height from an image file's header, without reading its pixels;
+// std::nullopt when the file is missing or not an image OIIO opens (how a rerun
+// of a series tells a frame already written: outputs are atomic, so a file
+// under its final name is complete).
+std::optional<std::array<int, 2>> image_file_size(const std::string& path);
 
 // The file type comes from the extension: .tif/.tiff (uncompressed), .png, .exr
 // (zip, lossless). uint8/uint16 store round(clamp(v, 0, 1) * 255 resp. 65535),

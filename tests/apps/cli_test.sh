@@ -39,7 +39,7 @@ cams="$src/data/cameras"
 
 # --help on every command.
 for cmd in "" "camera" "camera convert" "camera show" "camera compare" "demo" "calib" "calib detect" \
-  "calib intrinsics" "calib report" "target" "target print" "target show" "render"; do
+  "calib intrinsics" "calib report" "target" "target print" "target show" "render" "correct" "coverage"; do
   # shellcheck disable=SC2086
   "$glasspiv" $cmd --help >"$work/out" 2>&1 && grep -q "Usage" "$work/out" && ok || fail "glasspiv $cmd --help"
 done
@@ -152,6 +152,65 @@ sed 's/material: grey}/material: N-BK7}/' "$work/lens.yaml" >"$work/glassrect.ya
 expect_error 2 "glassrect.yaml" "opaque" -- "$glasspiv" render "$work/glassrect.yaml" --setup -o "$work/x.tif"
 expect_error 2 "lens.tif" "input" -- "$glasspiv" render "$work/lens.yaml" --sheet-texture "$work/lens.tif" -o "$work/lens.tif"
 [ ! -e "$work/x.tif" ] && ok || fail "a failed render wrote an image"
+
+# Correct: frames rendered through the ball lens by the two-camera scene, then
+# corrected (camera grid, sheet grid, several cameras), resumed, sharded, and bad input.
+mkdir -p "$work/frames" "$work/side"
+for i in 1 2 3; do
+  expect_ok "$glasspiv" render "$work/two.yaml" --camera small --sheet-pattern particles --particle-density 0.5 \
+    --particle-diameter-mm 1.5 --seed "$i" -o "$work/frames/f$i.tif" --map "$work/small.tmap"
+  expect_ok "$glasspiv" render "$work/two.yaml" --camera side --sheet-pattern particles --particle-density 0.5 \
+    --particle-diameter-mm 1.5 --seed "$i" -o "$work/side/f$i.tif" --map "$work/side.tmap"
+done
+expect_ok "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/corr"
+[ -s "$work/corr/f1.tif" ] && [ -s "$work/corr/f3.tif" ] && [ -s "$work/corr/mask.tif" ] && ok \
+  || fail "correct wrote no corrected frames or mask: $(ls "$work/corr")"
+grep -q "corrected 3 frames" "$work/out" && ok || fail "correct did not report 3 frames: $(cat "$work/out")"
+ls "$work/corr" | grep -q '\.tmp' && fail "correct left temporary files" || ok
+rm "$work/corr/f2.tif"
+expect_ok "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/corr"
+grep -q "corrected 1 frames" "$work/out" && grep -q "2 already done" "$work/out" && grep -q "reused the correction operator" "$work/out" \
+  && ok || fail "a rerun did not redo only the missing frame from the cached operator: $(cat "$work/out")"
+expect_ok "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/sheet" --grid sheet --method lsq --format float
+[ -s "$work/sheet/f1.tif" ] && [ -s "$work/sheet/sheet_grid.yaml" ] && ok || fail "correct --grid sheet wrote no frame or grid file"
+for k in 0 1; do expect_ok "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/shard" --shard "$k/2"; done
+[ "$(ls "$work/shard"/f*.tif | wc -l)" -eq 3 ] && ok || fail "two shards did not write the three frames"
+expect_ok "$glasspiv" correct "$work/two.yaml" --frame "small=$work/frames/f1.tif" --frame "side=$work/side/f1.tif" \
+  -o "$work/both.tif" --method lsq
+[ -s "$work/both.tif" ] && [ -s "$work/both_mask.tif" ] && [ -s "$work/both_coverage.tif" ] && ok \
+  || fail "two-camera correct wrote no image, mask or coverage"
+expect_ok "$glasspiv" correct "$work/two.yaml" --frame "small=$work/frames" --frame "side=$work/side/f*.tif" -o "$work/pairs"
+[ "$(ls "$work/pairs"/f*.tif | wc -l)" -eq 3 ] && ok || fail "two-camera series did not write three instants"
+expect_ok "$glasspiv" coverage "$work/two.yaml" -o "$work/coverage.png"
+[ -s "$work/coverage.png" ] && grep -q "together" "$work/out" && ok || fail "coverage wrote no picture or figures"
+cp "$work/frames/f1.tif" "$work/f1_copy.tif"
+expect_error 2 "image size" "small" -- "$glasspiv" correct "$work/two.yaml" --camera small "$work/side/f1.tif" -o "$work/bad"
+expect_error 2 "--camera" "nope" -- "$glasspiv" correct "$work/two.yaml" --camera nope "$work/frames" -o "$work/bad"
+expect_error 2 "--frame" "has 3" -- "$glasspiv" correct "$work/two.yaml" --frame "small=$work/frames" --frame "side=$work/side/f1.tif" -o "$work/bad"
+expect_error 2 "input" -- "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames/f1.tif" -o "$work/frames"
+expect_error 2 "same output" -- "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames/f1.tif" "$work/side/f1.tif" -o "$work/bad"
+expect_error 2 "--shard" -- "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/bad" --shard 2/2
+head -c 3000 "$work/frames/f1.tif" >"$work/trunc.tif"
+expect_error 2 "trunc.tif" -- "$glasspiv" correct "$work/two.yaml" --camera small "$work/trunc.tif" -o "$work/bad"
+op=$(ls "$work/corr/cache/"*.gop | head -n 1)
+printf 'garbage' | dd of="$op" bs=1 seek=200 conv=notrunc 2>/dev/null
+expect_error 2 ".gop" "delete it" -- "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/corr"
+# kill -9 in the middle of a series leaves no file under a final name half-written.
+for i in $(seq 4 40); do cp "$work/frames/f1.tif" "$work/frames/f$i.tif"; done
+rm -f "$op"
+"$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/killed" --method lsq >/dev/null 2>&1 &
+pid=$!
+sleep 1.5
+kill -9 "$pid" 2>/dev/null
+wait "$pid" 2>/dev/null
+bad=0
+for f in "$work/killed"/f*.tif; do
+  [ -e "$f" ] || continue
+  "$glasspiv" correct "$work/two.yaml" --camera small "$f" -o "$work/check" --no-cache >/dev/null 2>&1 || bad=1
+done
+[ "$bad" -eq 0 ] && ok || fail "a killed series left an unreadable frame"
+expect_ok "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/killed" --method lsq
+[ "$(ls "$work/killed"/f*.tif | wc -l)" -eq 40 ] && ok || fail "the rerun after kill -9 did not complete the series"
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -309,7 +309,8 @@ TEST(CorrectionOperatorFingerprint, IsFnv1aOfTheDocumentedByteStream) {
   add(in.grid.t0_mm);
   add(std::uint32_t{in.options.footprint_filter ? 1u : 0u});
   add(std::int32_t{in.options.max_taps_per_axis});
-  ASSERT_EQ(stream.size(), 4u + 8 + 4 + 4 + 3 * 8 + 4 + 4);
+  add(std::uint32_t{in.options.taps_by_weight ? 1u : 0u});
+  ASSERT_EQ(stream.size(), 4u + 8 + 4 + 4 + 3 * 8 + 4 + 4 + 4);
   std::uint64_t h = 14695981039346656037ull;
   for (unsigned char c : stream) h = (h ^ c) * 1099511628211ull;
   EXPECT_EQ(in.fingerprint(), h);
@@ -336,6 +337,7 @@ TEST(CorrectionOperatorFingerprint, ChangesWithEverySingleInput) {
       {"s0 and t0 swapped", [](FingerprintInputs& in) { std::swap(in.grid.s0_mm, in.grid.t0_mm); }},
       {"options.footprint_filter", [](FingerprintInputs& in) { in.options.footprint_filter = !in.options.footprint_filter; }},
       {"options.max_taps_per_axis", [](FingerprintInputs& in) { in.options.max_taps_per_axis += 1; }},
+      {"options.taps_by_weight", [](FingerprintInputs& in) { in.options.taps_by_weight = !in.options.taps_by_weight; }},
   };
   std::map<std::uint64_t, std::string> seen = {{base.fingerprint(), "base"}};
   for (const auto& [name, change] : changes) {
@@ -356,7 +358,7 @@ TEST(CorrectionOperatorFingerprint, ChangesWithEverySingleInput) {
 TEST(CorrectionOperatorFingerprint, HashesEveryFieldOfTheInputStructs) {
 #if defined(__LP64__)
   EXPECT_EQ(sizeof(SheetGrid), 32u) << "SheetGrid changed: hash the new field and store it in the header";
-  EXPECT_EQ(sizeof(OperatorOptions), 8u) << "OperatorOptions changed: hash the new field";
+  EXPECT_EQ(sizeof(OperatorOptions), 12u) << "OperatorOptions changed: hash the new field";
   EXPECT_EQ(sizeof(CorrectionOperator), 2 * sizeof(int) + sizeof(SheetGrid) + 10 * sizeof(std::vector<float>))
       << "CorrectionOperator changed: store a new stored array in the file (or derive it on reading)";
 #else

@@ -44,7 +44,9 @@ TEST(CorrectionOperator, ForwardEqualsTheRenderThroughTheReactor) {
   const SceneCameraSetup s = load_scene_camera("reactor.yaml", 16);
   const TransportMap map = build_transport_map(s.trace, s.camera, s.pose, TraceOptions{}, 1, 2);
   const SheetGrid grid = sheet_grid_covering(s.trace.sheet, 1.0);
-  const CorrectionOperator op = build_correction_operator(map, grid);
+  OperatorOptions full;  // every crossing its full tap count, as the texture reads it
+  full.taps_by_weight = false;
+  const CorrectionOperator op = build_correction_operator(map, grid, full);
   const std::vector<float> l = random_field(grid, 2);
   std::vector<float> image(op.pixel_count());
   apply_forward(op, l.data(), 0, image.data());

@@ -1,0 +1,493 @@
+// glasspiv correct: distorted PIV frames made undistorted through the scene's
+// calibrated model (one camera onto its own grid with the glass removed or
+// onto the rectified sheet grid; several cameras onto the sheet grid), and
+// glasspiv coverage: which parts of the sheet a set of cameras can reconstruct.
+#include <glob.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <set>
+
+#include <fmt/format.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "apps/cli_files.h"
+#include "apps/commands.h"
+#include "apps/correction_setup.h"
+#include "apps/photo_detection.h"
+#include "correct/reconstruct.h"
+#include "correct/series.h"
+#include "util/atomic_file.h"
+#include "util/image_file.h"
+#include "util/input_error.h"
+#include "util/progress_bar.h"
+#include "util/stopwatch.h"
+
+namespace glasspiv {
+namespace {
+namespace fs = std::filesystem;
+
+struct CorrectOptions {
+  std::string scene, camera, output, grid = "camera", method = "accumulate", format = "16", cache_dir, shard;
+  std::vector<std::string> images, frames;
+  double mm_per_px = 0, smoothness = LeastSquaresOptions{}.smoothness;
+  double min_pixels = MaskOptions{}.min_pixels_per_cell, min_weight = MaskOptions{}.min_mean_weight;
+  double trace_min_weight = TraceOptions{}.min_weight;
+  int max_iterations = LeastSquaresOptions{}.max_iterations, samples = 1, threads = 0, binning = 1;
+  bool no_reflections = false, no_cache = false;
+};
+
+CorrectionSettings settings(const CorrectOptions& o, const std::string& default_cache) {
+  CorrectionSettings s;
+  s.trace.min_weight = o.trace_min_weight;
+  s.trace.reflections = !o.no_reflections;
+  s.samples = o.samples;
+  s.mask.min_pixels_per_cell = o.min_pixels;
+  s.mask.min_mean_weight = o.min_weight;
+  s.binning = o.binning;
+  s.threads = o.threads;
+  s.cache_dir = o.no_cache ? "" : (!o.cache_dir.empty() ? o.cache_dir : default_cache);
+  return s;
+}
+
+SheetGrid grid_for(const CorrectionScene& cs, double mm_per_px) {
+  try {
+    return sheet_grid_covering(cs.trace.sheet, mm_per_px);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("", "--mm-per-px", e.what());
+  }
+}
+
+// "K/N" with 0 <= K < N.
+std::pair<int, int> parse_shard(const std::string& text) {
+  int k = -1, n = 0;
+  char slash = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d %c %d %c", &k, &slash, &n, &extra) != 3 || slash != '/' || n < 1 || k < 0 || k >= n)
+    throw InputError("", "--shard", fmt::format("'{}' is not K/N with 0 <= K < N (e.g. 0/4 .. 3/4)", text));
+  return {k, n};
+}
+
+// Files, folders of images (sorted) or glob patterns.
+std::vector<std::string> expand_frames(const std::string& spec) {
+  if (spec.find_first_of("*?[") != std::string::npos && !fs::exists(spec)) {
+    glob_t g{};
+    std::vector<std::string> out;
+    if (::glob(spec.c_str(), 0, nullptr, &g) == 0)
+      for (std::size_t i = 0; i < g.gl_pathc; ++i) out.emplace_back(g.gl_pathv[i]);
+    ::globfree(&g);
+    if (out.empty()) throw InputError(spec, "", "the pattern matches no file");
+    return out;  // glob sorts
+  }
+  return expand_photo_inputs({spec});
+}
+
+PixelFormat output_format(const std::string& name) {
+  const PixelFormat f = pixel_format_from_name(name, "--format");
+  return f;
+}
+
+void check_frame_size(const GrayImage& img, const std::string& path, const CorrectionCamera& cam) {
+  if (img.width != cam.model.width_px() || img.height != cam.model.height_px())
+    throw InputError(path, "image size",
+                     fmt::format("{}x{} px, but camera '{}' records {}x{} px", img.width, img.height, cam.name,
+                                 cam.model.width_px(), cam.model.height_px()));
+}
+
+std::vector<float> mask_values(const std::vector<CellState>& states) {
+  std::vector<float> v(states.size());
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = states[i] == CellState::valid ? 1.0f : 0.0f;
+  return v;
+}
+
+void write_grid_placement(const std::string& path, const SheetGrid& g, const CorrectionScene& cs) {
+  const SheetGridPlacement w = sheet_grid_placement(g, cs.trace.sheet);
+  auto v3 = [](const Eigen::Vector3d& v) { return fmt::format("[{:.17g}, {:.17g}, {:.17g}]", v.x(), v.y(), v.z()); };
+  write_file_atomically(
+      path, fmt::format("# glasspiv sheet grid (docs/correction.md): image column c, row r is the sheet point\n"
+                        "# s = s0_mm + c * mm_per_px, t = t0_mm - r * mm_per_px, in the world\n"
+                        "# cell00_centre_mm + c * col_step_mm + r * row_step_mm.\n"
+                        "glasspiv_sheet_grid: 1\nscene: {}\ncols: {}\nrows: {}\nmm_per_px: {:.17g}\ns0_mm: {:.17g}\n"
+                        "t0_mm: {:.17g}\ncell00_centre_mm: {}\ncol_step_mm: {}\nrow_step_mm: {}\n",
+                        cs.scene.source, g.cols, g.rows, g.mm_per_px, g.s0_mm, g.t0_mm, v3(w.cell00_centre_mm),
+                        v3(w.col_step_mm), v3(w.row_step_mm)));
+}
+
+void print_coverage(const CellCounts& n, const char* what) {
+  std::printf("%s: %.2f%% of the sheet's fluid region valid (%zu cells; masked: %zu never seen, %zu too few pixels, "
+              "%zu mostly reflected, %zu too little weight; %zu inside solids)\n",
+              what, 100 * n.valid_fraction_of_fluid(), n.valid, n.never_seen, n.few_pixels, n.mostly_reflected,
+              n.low_weight, n.inside_solid);
+}
+
+// Output names: DIR/<input stem>.tif, distinct, none of them an input.
+std::vector<std::string> output_names(const std::vector<std::string>& inputs, const std::string& dir,
+                                      const std::vector<std::string>& other_inputs) {
+  std::vector<std::string> out;
+  std::set<std::string> seen;
+  for (const std::string& in : inputs) {
+    const std::string name = (fs::path(dir) / (fs::path(in).stem().string() + ".tif")).string();
+    if (!seen.insert(fs::weakly_canonical(name).string()).second)
+      throw InputError(in, "", "two frames would be written to the same output " + name + " (rename one)");
+    for (const std::string& i : inputs) check_not_input(i, name);
+    for (const std::string& i : other_inputs) check_not_input(i, name);
+    out.push_back(name);
+  }
+  return out;
+}
+
+struct Frame {
+  std::vector<GrayImage> images;  // per camera
+  std::vector<float> result;
+};
+
+void run_one_camera(const CorrectOptions& o) {
+  const PixelFormat format = output_format(o.format);
+  if (format == PixelFormat::uint8) throw InputError("", "--format", "write 16 or float (8 bits lose the corrected levels)");
+  const std::vector<std::string> inputs = expand_photo_inputs(o.images);
+  CorrectionScene cs = read_correction_scene(o.scene);
+  const CorrectionSettings s = settings(o, (fs::path(o.output) / "cache").string());
+  const std::vector<std::string> outputs = output_names(inputs, o.output, {o.scene});
+  const int ci = find_camera(cs.scene, o.camera, "--camera");
+  std::vector<std::size_t> frames(inputs.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) frames[i] = i;
+  if (!o.shard.empty()) {
+    const auto [k, n] = parse_shard(o.shard);
+    frames = shard_frames(inputs.size(), k, n);
+  }
+  fs::create_directories(o.output);
+
+  const GlassRemovedView direct = glass_removed_view(cs, ci, s);
+  const SheetGrid grid = grid_for(cs, o.mm_per_px > 0 ? o.mm_per_px : direct.footprint_mm);
+  std::printf("scene %s: camera '%s'; sheet grid %dx%d cells of %.4g mm%s\n", o.scene.c_str(),
+              cs.scene.cameras[static_cast<std::size_t>(ci)].name.c_str(), grid.cols, grid.rows, grid.mm_per_px,
+              o.mm_per_px > 0 ? "" : " (the camera's own pixel on the sheet)");
+  add_correction_camera(cs, ci, grid, s);
+  const CorrectionCamera& cam = cs.cameras.front();
+  const std::vector<CellState> states = classify_cells(camera_operators(cs), cs.trace, s.mask);
+  print_coverage(count_cells(states), ("camera '" + cam.name + "'").c_str());
+
+  const bool on_camera = o.grid == "camera";
+  CameraResampler resampler;
+  int out_w = grid.cols, out_h = grid.rows;
+  if (on_camera) {
+    resampler = make_camera_resampler(build_correction_operator(direct.map, grid, s.op, s.threads), states);
+    out_w = cam.model.width_px();
+    out_h = cam.model.height_px();
+    std::size_t valid = 0;
+    for (std::uint8_t v : resampler.pixel_valid) valid += v != 0;
+    std::printf("camera grid (glass removed): %.2f%% of the pixels valid\n", 100.0 * valid / resampler.pixel_valid.size());
+    std::vector<float> m(resampler.pixel_valid.begin(), resampler.pixel_valid.end());
+    for (float& v : m) v /= 255;
+    write_gray_image((fs::path(o.output) / "mask.tif").string(), m.data(), out_w, out_h, PixelFormat::uint8);
+  } else {
+    const std::vector<float> m = mask_values(states);
+    write_gray_image((fs::path(o.output) / "mask.tif").string(), m.data(), out_w, out_h, PixelFormat::uint8);
+    write_grid_placement((fs::path(o.output) / "sheet_grid.yaml").string(), grid, cs);
+  }
+
+  LeastSquaresOptions lsq;
+  lsq.smoothness = o.smoothness;
+  lsq.max_iterations = o.max_iterations;
+  const bool least = o.method == "lsq";
+  const double background = cs.scene.background.radiance;
+  ProgressBar bar("correct frames", frames.size());
+  const SeriesStats st = run_series<Frame>(
+      frames,
+      [&](std::size_t i) {
+        const auto size = image_file_size(outputs[i]);
+        return size && (*size)[0] == out_w && (*size)[1] == out_h;
+      },
+      [&](std::size_t i) {
+        Frame f;
+        f.images.push_back(read_gray_image(inputs[i]));
+        check_frame_size(f.images[0], inputs[i], cam);
+        return f;
+      },
+      [&](std::size_t, Frame& f) {
+        const std::vector<CameraImage> views = {{&cam.op, f.images[0].values.data(), 1.0, background}};
+        std::vector<float> l = back_projection(views, states);
+        if (least) l = least_squares(views, states, l, lsq);
+        if (on_camera) {
+          f.result.resize(static_cast<std::size_t>(out_w) * out_h);
+          resample_to_camera(resampler, l.data(), f.result.data());
+        } else {
+          f.result = std::move(l);
+        }
+      },
+      [&](std::size_t i, const Frame& f) { write_gray_image(outputs[i], f.result.data(), out_w, out_h, format); },
+      [&](std::size_t done, std::size_t) { bar.set_done(done); });
+  bar.finish();
+  std::printf("corrected %zu frames in %.2f s (%.1f frames/s, %s, %s grid %dx%d)%s; wrote %s/\n", st.corrected,
+              st.seconds, st.corrected / std::max(1e-9, st.seconds), least ? "least squares" : "back-projection",
+              on_camera ? "camera" : "sheet", out_w, out_h,
+              st.skipped ? fmt::format("; {} already done, skipped", st.skipped).c_str() : "", o.output.c_str());
+}
+
+void run_several_cameras(const CorrectOptions& o) {
+  const PixelFormat format = output_format(o.format);
+  if (format == PixelFormat::uint8) throw InputError("", "--format", "write 16 or float (8 bits lose the corrected levels)");
+  if (!o.images.empty()) throw InputError("", "--frame", "give frames either as --frame CAMERA=FILES or as IMAGES with --camera, not both");
+  if (o.grid != "sheet")
+    throw InputError("", "--grid", "--frame combines cameras on the sheet grid; for one camera's own grid give IMAGES and --camera");
+  CorrectionScene cs = read_correction_scene(o.scene);
+  // CAMERA=FILES, one camera each.
+  std::vector<std::pair<int, std::vector<std::string>>> per_camera;
+  std::set<int> used;
+  for (const std::string& f : o.frames) {
+    const auto eq = f.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == f.size())
+      throw InputError("", "--frame", fmt::format("'{}' is not CAMERA=FILE (or =FOLDER, =PATTERN)", f));
+    const int ci = find_camera(cs.scene, f.substr(0, eq), "--frame");
+    if (!used.insert(ci).second) throw InputError("", "--frame", "camera '" + f.substr(0, eq) + "' given twice");
+    per_camera.emplace_back(ci, expand_frames(f.substr(eq + 1)));
+  }
+  const std::size_t count = per_camera.front().second.size();
+  for (const auto& [ci, files] : per_camera)
+    if (files.size() != count)
+      throw InputError("", "--frame",
+                       fmt::format("camera '{}' has {} frames but camera '{}' has {}: frames are matched by index",
+                                   cs.scene.cameras[static_cast<std::size_t>(ci)].name, files.size(),
+                                   cs.scene.cameras[static_cast<std::size_t>(per_camera.front().first)].name, count));
+  const bool single_file = count == 1 && (lower_extension(o.output) == ".tif" || lower_extension(o.output) == ".tiff");
+  const std::string dir = single_file ? fs::path(o.output).parent_path().string() : o.output;
+  const CorrectionSettings s = settings(o, ((dir.empty() ? fs::path(".") : fs::path(dir)) / "glasspiv-cache").string());
+  std::vector<std::string> all_inputs = {o.scene};
+  for (const auto& pc : per_camera) all_inputs.insert(all_inputs.end(), pc.second.begin(), pc.second.end());
+  std::vector<std::string> outputs;
+  if (single_file) {
+    for (const std::string& i : all_inputs) check_not_input(i, o.output);
+    outputs = {o.output};
+  } else {
+    outputs = output_names(per_camera.front().second, o.output, all_inputs);
+  }
+  const std::string stem = single_file ? (fs::path(dir) / fs::path(o.output).stem()).string() + "_" : (fs::path(dir) / "").string();
+  const std::string mask_path = stem + "mask.tif", coverage_path = stem + "coverage.tif";
+  for (const std::string& i : all_inputs) {
+    check_not_input(i, mask_path);
+    check_not_input(i, coverage_path);
+  }
+  std::vector<std::size_t> frames(count);
+  for (std::size_t i = 0; i < count; ++i) frames[i] = i;
+  if (!o.shard.empty()) {
+    const auto [k, n] = parse_shard(o.shard);
+    frames = shard_frames(count, k, n);
+  }
+  if (!dir.empty()) fs::create_directories(dir);
+
+  const GlassRemovedView direct = glass_removed_view(cs, per_camera.front().first, s);
+  const SheetGrid grid = grid_for(cs, o.mm_per_px > 0 ? o.mm_per_px : direct.footprint_mm);
+  std::printf("scene %s: %zu cameras, %zu frames each; sheet grid %dx%d cells of %.4g mm\n", o.scene.c_str(),
+              per_camera.size(), count, grid.cols, grid.rows, grid.mm_per_px);
+  for (const auto& pc : per_camera) add_correction_camera(cs, pc.first, grid, s);
+  const std::vector<CameraOperator> ops = camera_operators(cs);
+  const std::vector<CellState> states = classify_cells(ops, cs.trace, s.mask);
+  // Coverage count: cameras that could reconstruct each cell alone.
+  std::vector<float> coverage(grid.cell_count(), 0.0f);
+  for (std::size_t k = 0; k < ops.size(); ++k) {
+    const std::vector<CellState> own = classify_cells({ops[k]}, cs.trace, s.mask);
+    print_coverage(count_cells(own), ("camera '" + cs.cameras[k].name + "'").c_str());
+    for (std::size_t c = 0; c < own.size(); ++c) coverage[c] += own[c] == CellState::valid ? 1.0f / 255 : 0.0f;
+  }
+  print_coverage(count_cells(states), "together");
+  const std::vector<float> m = mask_values(states);
+  write_gray_image(mask_path, m.data(), grid.cols, grid.rows, PixelFormat::uint8);
+  write_gray_image(coverage_path, coverage.data(), grid.cols, grid.rows, PixelFormat::uint8);
+  write_grid_placement(stem + "sheet_grid.yaml", grid, cs);
+
+  LeastSquaresOptions lsq;
+  lsq.smoothness = o.smoothness;
+  lsq.max_iterations = o.max_iterations;
+  const bool least = o.method == "lsq";
+  const double background = cs.scene.background.radiance;
+  ProgressBar bar("correct frames", frames.size());
+  int iterations = 0;
+  const SeriesStats st = run_series<Frame>(
+      frames,
+      [&](std::size_t i) {
+        const auto size = image_file_size(outputs[i]);
+        return size && (*size)[0] == grid.cols && (*size)[1] == grid.rows;
+      },
+      [&](std::size_t i) {
+        Frame f;
+        for (std::size_t k = 0; k < per_camera.size(); ++k) {
+          const std::string& path = per_camera[k].second[i];
+          f.images.push_back(read_gray_image(path));
+          check_frame_size(f.images.back(), path, cs.cameras[k]);
+        }
+        return f;
+      },
+      [&](std::size_t, Frame& f) {
+        std::vector<CameraImage> views;
+        for (std::size_t k = 0; k < cs.cameras.size(); ++k)
+          views.push_back({&cs.cameras[k].op, f.images[k].values.data(), 1.0, background});
+        f.result = back_projection(views, states);
+        if (least) {
+          LeastSquaresReport rep;
+          f.result = least_squares(views, states, f.result, lsq, &rep);
+          iterations += rep.iterations;
+        }
+      },
+      [&](std::size_t i, const Frame& f) { write_gray_image(outputs[i], f.result.data(), grid.cols, grid.rows, format); },
+      [&](std::size_t done, std::size_t) { bar.set_done(done); });
+  bar.finish();
+  std::printf("corrected %zu instants in %.2f s (%.2f per s, %s%s)%s; mask %s, coverage count %s\n", st.corrected,
+              st.seconds, st.corrected / std::max(1e-9, st.seconds), least ? "least squares" : "accumulation",
+              least && st.corrected ? fmt::format(", {:.0f} iterations each", double(iterations) / st.corrected).c_str() : "",
+              st.skipped ? fmt::format("; {} already done, skipped", st.skipped).c_str() : "", mask_path.c_str(),
+              coverage_path.c_str());
+}
+
+void run_correct(const CorrectOptions& o) {
+  if (!o.frames.empty()) return run_several_cameras(o);
+  if (o.images.empty()) throw InputError("", "IMAGES", "give the frames to correct (files or folders), or --frame CAMERA=FILES");
+  if (lower_extension(o.output) == ".tif" || lower_extension(o.output) == ".tiff")
+    throw InputError(o.output, "-o", "one camera writes a folder (one corrected image per frame, and mask.tif)");
+  run_one_camera(o);
+}
+
+// glasspiv coverage
+struct CoverageOptions {
+  std::string scene, output, cache_dir;
+  std::vector<std::string> cameras;
+  double mm_per_px = 0, min_pixels = MaskOptions{}.min_pixels_per_cell, min_weight = MaskOptions{}.min_mean_weight;
+  int binning = 1, threads = 0;
+  bool no_reflections = false;
+};
+
+void run_coverage(const CoverageOptions& o) {
+  if (lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
+  check_not_input(o.scene, o.output);
+  CorrectionScene cs = read_correction_scene(o.scene);
+  std::vector<int> indices;
+  if (o.cameras.empty())
+    for (std::size_t i = 0; i < cs.scene.cameras.size(); ++i) indices.push_back(static_cast<int>(i));
+  for (const std::string& name : o.cameras) indices.push_back(find_camera(cs.scene, name, "--camera"));
+  CorrectOptions co;
+  co.binning = o.binning;
+  co.threads = o.threads;
+  co.no_reflections = o.no_reflections;
+  co.min_pixels = o.min_pixels;
+  co.min_weight = o.min_weight;
+  co.cache_dir = o.cache_dir;
+  const fs::path parent = fs::path(o.output).parent_path();
+  const CorrectionSettings s = settings(co, ((parent.empty() ? fs::path(".") : parent) / "glasspiv-cache").string());
+  const SheetGrid grid =
+      grid_for(cs, o.mm_per_px > 0 ? o.mm_per_px : glass_removed_view(cs, indices.front(), s).footprint_mm);
+  std::printf("scene %s: sheet grid %dx%d cells of %.4g mm\n", o.scene.c_str(), grid.cols, grid.rows, grid.mm_per_px);
+  for (int ci : indices) add_correction_camera(cs, ci, grid, s);
+  const std::vector<CameraOperator> ops = camera_operators(cs);
+  std::vector<int> count(grid.cell_count(), 0);
+  for (std::size_t k = 0; k < ops.size(); ++k) {
+    const std::vector<CellState> own = classify_cells({ops[k]}, cs.trace, s.mask);
+    print_coverage(count_cells(own), ("camera '" + cs.cameras[k].name + "'").c_str());
+    for (std::size_t c = 0; c < own.size(); ++c) count[c] += own[c] == CellState::valid;
+  }
+  const std::vector<CellState> together = classify_cells(ops, cs.trace, s.mask);
+  const CellCounts n = count_cells(together);
+  print_coverage(n, "together");
+  std::printf("of what the cameras see without reflections, %.2f%% is reconstructable\n", 100 * n.valid_fraction_of_seen());
+  // Colours (BGR): valid in greens, brighter with more cameras that see the cell alone; masked cells by reason.
+  cv::Mat img(grid.rows, grid.cols, CV_8UC3);
+  const int cams = static_cast<int>(ops.size());
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r) * grid.cols + c;
+      cv::Vec3b colour;
+      switch (together[i]) {
+        case CellState::valid: {
+          const int g = 110 + 145 * std::max(count[i], 1) / std::max(cams, 1);
+          colour = cv::Vec3b(60, static_cast<unsigned char>(g), 40);
+          break;
+        }
+        case CellState::inside_solid: colour = cv::Vec3b(90, 60, 40); break;
+        case CellState::never_seen: colour = cv::Vec3b(0, 0, 0); break;
+        case CellState::few_pixels: colour = cv::Vec3b(40, 40, 200); break;
+        case CellState::mostly_reflected: colour = cv::Vec3b(200, 60, 160); break;
+        case CellState::low_weight: colour = cv::Vec3b(40, 160, 220); break;
+      }
+      img.at<cv::Vec3b>(r, c) = colour;
+    }
+  write_file_atomically_with(o.output, [&](const std::string& tmp) {
+    if (!cv::imwrite(tmp, img)) throw InputError(o.output, "", "cannot write the PNG");
+  });
+  std::printf("wrote %s (%dx%d: green valid, brighter where more cameras see it alone; black never seen, red too few "
+              "pixels, purple mostly reflected, orange too little weight, blue inside solids)\n",
+              o.output.c_str(), grid.cols, grid.rows);
+}
+
+void add_common(CLI::App* c, CorrectOptions& o) {
+  c->add_option("--mm-per-px", o.mm_per_px,
+                "Sheet grid pitch in mm (default: the first camera's own pixel on the sheet, glass removed)")
+      ->check(CLI::PositiveNumber);
+  c->add_option("--method", o.method, "accumulate (back-projection, the published method) or lsq (least squares)")
+      ->check(CLI::IsMember({"accumulate", "lsq"}));
+  c->add_option("--smoothness", o.smoothness, "Least squares: weight of the gradient penalty (dimensionless, default 0.01)")
+      ->check(CLI::Range(0.0, 1e6));
+  c->add_option("--max-iterations", o.max_iterations, "Least squares: most CGLS iterations (default 100)")
+      ->check(CLI::Range(1, 100000));
+  c->add_option("--format", o.format, "Output pixels: 16 (default) or float");
+  c->add_option("--min-pixels", o.min_pixels,
+                "Mask: fewest camera pixels per sheet cell (default 0.25; docs/correction.md)")
+      ->check(CLI::Range(0.0, 1e6));
+  c->add_option("--min-weight", o.min_weight, "Mask: least light per pixel that sees a cell directly (default 0.1)")
+      ->check(CLI::Range(0.0, 1.0));
+  c->add_option("--shard", o.shard, "K/N: correct frames K, K+N, K+2N, ... only (0 <= K < N; docs/cluster.md)");
+  c->add_option("--cache-dir", o.cache_dir, "Where transport maps and operators are cached (default: beside the output)");
+  c->add_flag("--no-cache", o.no_cache, "Trace and build without reading or writing a cache");
+  c->add_option("--binning", o.binning, "Cameras read out K x K binned (the frames must be too)")->check(CLI::Range(1, 64));
+  c->add_option("--samples", o.samples, "Map samples per pixel axis (default 1)")->check(CLI::Range(1, 16));
+  c->add_option("--trace-min-weight", o.trace_min_weight, "Map: branches below this weight are not followed (default 0.01)")
+      ->check(CLI::Range(0.0, 1.0));
+  c->add_flag("--no-reflections", o.no_reflections, "Map: follow refracted branches only");
+  c->add_option("--threads", o.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+}
+
+}  // namespace
+
+void register_correct_commands(CLI::App& app) {
+  auto o = std::make_shared<CorrectOptions>();
+  CLI::App* c = app.add_subcommand(
+      "correct",
+      "Correct distorted PIV frames through the scene's model: one camera onto its own pixels with the glass removed "
+      "(or onto the sheet grid), several cameras onto the sheet grid");
+  c->add_option("scene", o->scene, "Scene file (docs/scene.md)")->required()->check(CLI::ExistingFile);
+  c->add_option("images", o->images, "Frames of one camera: 8/16-bit or float TIFF (files or folders)");
+  c->add_option("-o,--output", o->output,
+                "Output folder (one corrected TIFF per frame, mask.tif); with --frame and one frame per camera, "
+                "a .tif file")
+      ->required();
+  c->add_option("--camera", o->camera, "The camera of IMAGES (default: the scene's first)");
+  c->add_option("--frame", o->frames,
+                "CAMERA=FILE, CAMERA=FOLDER or CAMERA=PATTERN, once per camera: several cameras, frames matched by index");
+  CLI::Option* grid = c->add_option("--grid", o->grid, "camera (the same camera with the glass removed; one camera only) or sheet (mm grid)")
+      ->check(CLI::IsMember({"camera", "sheet"}));
+  add_common(c, *o);
+  c->callback([o, grid]() {
+    CorrectOptions opts = *o;
+    if (!opts.frames.empty() && grid->count() == 0) opts.grid = "sheet";
+    run_correct(opts);
+  });
+
+  auto v = std::make_shared<CoverageOptions>();
+  CLI::App* g = app.add_subcommand(
+      "coverage", "Which parts of the sheet a set of cameras can reconstruct: a picture and the covered fractions");
+  g->add_option("scene", v->scene, "Scene file (docs/scene.md)")->required()->check(CLI::ExistingFile);
+  g->add_option("-o,--output", v->output, "Picture to write (.png)")->required();
+  g->add_option("--camera", v->cameras, "Cameras to use (repeat; default: all of the scene's)");
+  g->add_option("--mm-per-px", v->mm_per_px, "Sheet grid pitch in mm (default: the first camera's pixel on the sheet)")
+      ->check(CLI::PositiveNumber);
+  g->add_option("--min-pixels", v->min_pixels, "Mask: fewest camera pixels per sheet cell (default 0.25)")
+      ->check(CLI::Range(0.0, 1e6));
+  g->add_option("--min-weight", v->min_weight, "Mask: least light per pixel that sees a cell directly (default 0.1)")
+      ->check(CLI::Range(0.0, 1.0));
+  g->add_option("--binning", v->binning, "Cameras read out K x K binned (a quick plan)")->check(CLI::Range(1, 64));
+  g->add_option("--cache-dir", v->cache_dir, "Where maps and operators are cached (default: beside the picture)");
+  g->add_flag("--no-reflections", v->no_reflections, "Follow refracted branches only");
+  g->add_option("--threads", v->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  g->callback([v]() { run_coverage(*v); });
+}
+
+}  // namespace glasspiv
