@@ -9,7 +9,8 @@ namespace glasspiv {
 SheetGrid sheet_grid_covering(const SheetPlane& sheet, double mm_per_px) {
   if (!(mm_per_px > 0) || !std::isfinite(mm_per_px))
     throw std::invalid_argument("sheet grid: mm per pixel must be finite and positive");
-  const double cols = std::ceil(sheet.extent_s_mm / mm_per_px - 1e-9), rows = std::ceil(sheet.extent_t_mm / mm_per_px - 1e-9);
+  // The same count as render/sheet_pattern.h pictures of the sheet, so one at this pitch lies on the grid.
+  const double cols = std::ceil(sheet.extent_s_mm / mm_per_px), rows = std::ceil(sheet.extent_t_mm / mm_per_px);
   if (!(cols * rows <= static_cast<double>(kMaxSheetGridCells)))
     throw std::invalid_argument("sheet grid: " + std::to_string(cols) + " x " + std::to_string(rows) +
                                 " cells exceed the limit of " + std::to_string(kMaxSheetGridCells) +
