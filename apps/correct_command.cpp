@@ -96,6 +96,22 @@ void check_frame_size(const GrayImage& img, const std::string& path, const Corre
                                  cam.model.width_px(), cam.model.height_px()));
 }
 
+// Every frame's header before any tracing: a wrong size or an unreadable file is
+// reported at once, not after minutes of work.
+void check_frame_headers(const std::vector<std::string>& paths, const CorrectionScene& cs, int camera_index, int binning) {
+  const SceneCamera& sc = cs.scene.cameras[static_cast<std::size_t>(camera_index)];
+  const CameraModel model = binning > 1 ? binned(sc.camera.model, binning) : sc.camera.model;
+  for (const std::string& path : paths) {
+    const auto size = image_file_size(path);
+    if (!size) read_gray_image(path);  // throws the reader's one-line error
+    if (!size || (*size)[0] != model.width_px() || (*size)[1] != model.height_px())
+      throw InputError(path, "image size",
+                       fmt::format("{}x{} px, but camera '{}' records {}x{} px{}", size ? (*size)[0] : 0,
+                                   size ? (*size)[1] : 0, sc.name, model.width_px(), model.height_px(),
+                                   binning > 1 ? fmt::format(" (binned {}x{})", binning, binning) : ""));
+  }
+}
+
 std::vector<float> mask_values(const std::vector<CellState>& states) {
   std::vector<float> v(states.size());
   for (std::size_t i = 0; i < v.size(); ++i) v[i] = states[i] == CellState::valid ? 1.0f : 0.0f;
@@ -157,6 +173,9 @@ void run_one_camera(const CorrectOptions& o) {
     const auto [k, n] = parse_shard(o.shard);
     frames = shard_frames(inputs.size(), k, n);
   }
+  for (const std::string& side : {"mask.tif", "sheet_grid.yaml"})
+    for (const std::string& in : inputs) check_not_input(in, (fs::path(o.output) / side).string());
+  check_frame_headers(inputs, cs, ci, o.binning);
   fs::create_directories(o.output);
 
   const GlassRemovedView direct = glass_removed_view(cs, ci, s);
@@ -275,6 +294,7 @@ void run_several_cameras(const CorrectOptions& o) {
     const auto [k, n] = parse_shard(o.shard);
     frames = shard_frames(count, k, n);
   }
+  for (const auto& [ci, files] : per_camera) check_frame_headers(files, cs, ci, o.binning);
   if (!dir.empty()) fs::create_directories(dir);
 
   const GlassRemovedView direct = glass_removed_view(cs, per_camera.front().first, s);
