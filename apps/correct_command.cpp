@@ -37,7 +37,7 @@ struct CorrectOptions {
   double min_pixels = MaskOptions{}.min_pixels_per_cell, min_weight = MaskOptions{}.min_mean_weight;
   double trace_min_weight = TraceOptions{}.min_weight;
   int max_iterations = LeastSquaresOptions{}.max_iterations, samples = 1, threads = 0, binning = 1;
-  bool no_reflections = false, no_cache = false;
+  bool no_reflections = false, no_cache = false, prepare_only = false;
 };
 
 CorrectionSettings settings(const CorrectOptions& o, const std::string& default_cache) {
@@ -173,6 +173,7 @@ void run_one_camera(const CorrectOptions& o) {
     const auto [k, n] = parse_shard(o.shard);
     frames = shard_frames(inputs.size(), k, n);
   }
+  if (o.prepare_only) frames.clear();
   for (const std::string& side : {"mask.tif", "sheet_grid.yaml"})
     for (const std::string& in : inputs) check_not_input(in, (fs::path(o.output) / side).string());
   check_frame_headers(inputs, cs, ci, o.binning);
@@ -294,6 +295,7 @@ void run_several_cameras(const CorrectOptions& o) {
     const auto [k, n] = parse_shard(o.shard);
     frames = shard_frames(count, k, n);
   }
+  if (o.prepare_only) frames.clear();
   for (const auto& [ci, files] : per_camera) check_frame_headers(files, cs, ci, o.binning);
   if (!dir.empty()) fs::create_directories(dir);
 
@@ -457,6 +459,8 @@ void add_common(CLI::App* c, CorrectOptions& o) {
   c->add_option("--shard", o.shard, "K/N: correct frames K, K+N, K+2N, ... only (0 <= K < N; docs/cluster.md)");
   c->add_option("--cache-dir", o.cache_dir, "Where transport maps and operators are cached (default: beside the output)");
   c->add_flag("--no-cache", o.no_cache, "Trace and build without reading or writing a cache");
+  c->add_flag("--prepare-only", o.prepare_only,
+              "Build the caches and write the mask, correct no frame (before a job array: docs/cluster.md)");
   c->add_option("--binning", o.binning, "Cameras read out K x K binned (the frames must be too)")->check(CLI::Range(1, 64));
   c->add_option("--samples", o.samples, "Map samples per pixel axis (default 1)")->check(CLI::Range(1, 16));
   c->add_option("--trace-min-weight", o.trace_min_weight, "Map: branches below this weight are not followed (default 0.01)")

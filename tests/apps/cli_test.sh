@@ -173,6 +173,8 @@ grep -q "corrected 1 frames" "$work/out" && grep -q "2 already done" "$work/out"
   && ok || fail "a rerun did not redo only the missing frame from the cached operator: $(cat "$work/out")"
 expect_ok "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/sheet" --grid sheet --method lsq --format float
 [ -s "$work/sheet/f1.tif" ] && [ -s "$work/sheet/sheet_grid.yaml" ] && ok || fail "correct --grid sheet wrote no frame or grid file"
+expect_ok "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/shard" --prepare-only
+[ -s "$work/shard/mask.tif" ] && [ ! -e "$work/shard/f1.tif" ] && ok || fail "--prepare-only corrected frames or wrote no mask"
 for k in 0 1; do expect_ok "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/shard" --shard "$k/2"; done
 [ "$(ls "$work/shard"/f*.tif | wc -l)" -eq 3 ] && ok || fail "two shards did not write the three frames"
 expect_ok "$glasspiv" correct "$work/two.yaml" --frame "small=$work/frames/f1.tif" --frame "side=$work/side/f1.tif" \
