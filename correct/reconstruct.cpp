@@ -132,8 +132,20 @@ double camera_rms(const StackedOperator::Residual& r) {
 
 std::vector<float> back_projection(const std::vector<CameraImage>& images, const std::vector<CellState>& states) {
   const SheetGrid& grid = common_grid(images, states);
-  std::vector<double> sum(grid.cell_count(), 0.0), weight(grid.cell_count(), 0.0);
   std::vector<float> per_cell(grid.cell_count());
+  std::vector<double> sum, weight;
+  if (images.size() > 1 || images[0].weight != 1 || images[0].background_radiance != 0) {
+    sum.assign(grid.cell_count(), 0.0);
+    weight.assign(grid.cell_count(), 0.0);
+  }
+  // One camera of weight 1 without background (the usual PIV frame): A^T I / W in place, no copies.
+  if (images.size() == 1 && images[0].weight == 1 && images[0].background_radiance == 0) {
+    const CorrectionOperator& op = *images[0].op;
+    apply_transpose(op, images[0].image, per_cell.data());
+    for (std::size_t c = 0; c < per_cell.size(); ++c)
+      per_cell[c] = states[c] == CellState::valid && op.cell_weight[c] > 0 ? per_cell[c] / op.cell_weight[c] : 0.0f;
+    return per_cell;
+  }
   for (const CameraImage& im : images) {
     const std::vector<float> b = data_term(im);  // sqrt(w) (I - bg)
     apply_transpose(*im.op, b.data(), per_cell.data());
