@@ -18,6 +18,7 @@
 #include "apps/commands.h"
 #include "apps/correction_setup.h"
 #include "apps/photo_detection.h"
+#include "correct/back_projector.h"
 #include "correct/reconstruct.h"
 #include "correct/series.h"
 #include "util/atomic_file.h"
@@ -174,7 +175,7 @@ void run_one_camera(const CorrectOptions& o) {
     frames = shard_frames(inputs.size(), k, n);
   }
   if (o.prepare_only) frames.clear();
-  for (const std::string& side : {"mask.tif", "sheet_grid.yaml"})
+  for (const char* side : {"mask.tif", "sheet_grid.yaml"})
     for (const std::string& in : inputs) check_not_input(in, (fs::path(o.output) / side).string());
   check_frame_headers(inputs, cs, ci, o.binning);
   fs::create_directories(o.output);
@@ -213,6 +214,12 @@ void run_one_camera(const CorrectOptions& o) {
   lsq.max_iterations = o.max_iterations;
   const bool least = o.method == "lsq";
   const double background = cs.scene.background.radiance;
+  // Back-projection prepared once: only the cells the output reads, already normalised.
+  const bool prepared = !least && background == 0;
+  std::vector<std::uint8_t> read_cells;
+  if (prepared && on_camera) read_cells = cells_read_by(resampler, grid.cell_count());
+  const BackProjector projector =
+      prepared ? make_back_projector(camera_operators(cs), states, on_camera ? &read_cells : nullptr) : BackProjector{};
   ProgressBar bar("correct frames", frames.size());
   const SeriesStats st = run_series<Frame>(
       frames,
@@ -228,7 +235,13 @@ void run_one_camera(const CorrectOptions& o) {
       },
       [&](std::size_t, Frame& f) {
         const std::vector<CameraImage> views = {{&cam.op, f.images[0].values.data(), 1.0, background}};
-        std::vector<float> l = back_projection(views, states);
+        std::vector<float> l;
+        if (prepared) {
+          l.assign(grid.cell_count(), 0.0f);
+          apply_back_projector(projector, f.images[0].values.data(), l.data());
+        } else {
+          l = back_projection(views, states);
+        }
         if (least) l = least_squares(views, states, l, lsq);
         if (on_camera) {
           f.result.resize(static_cast<std::size_t>(out_w) * out_h);
@@ -324,6 +337,8 @@ void run_several_cameras(const CorrectOptions& o) {
   lsq.max_iterations = o.max_iterations;
   const bool least = o.method == "lsq";
   const double background = cs.scene.background.radiance;
+  const bool prepared = !least && background == 0;
+  const BackProjector projector = prepared ? make_back_projector(ops, states) : BackProjector{};
   ProgressBar bar("correct frames", frames.size());
   int iterations = 0;
   const SeriesStats st = run_series<Frame>(
@@ -342,6 +357,14 @@ void run_several_cameras(const CorrectOptions& o) {
         return f;
       },
       [&](std::size_t, Frame& f) {
+        if (prepared) {
+          std::vector<float> frame;
+          frame.reserve(projector.frame_pixels);
+          for (const GrayImage& im : f.images) frame.insert(frame.end(), im.values.begin(), im.values.end());
+          f.result.assign(grid.cell_count(), 0.0f);
+          apply_back_projector(projector, frame.data(), f.result.data());
+          return;
+        }
         std::vector<CameraImage> views;
         for (std::size_t k = 0; k < cs.cameras.size(); ++k)
           views.push_back({&cs.cameras[k].op, f.images[k].values.data(), 1.0, background});
