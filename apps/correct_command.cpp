@@ -4,6 +4,7 @@
 // glasspiv coverage: which parts of the sheet a set of cameras can reconstruct.
 #include <glob.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -33,7 +34,7 @@ namespace fs = std::filesystem;
 
 struct CorrectOptions {
   std::string scene, camera, output, grid = "camera", method = "accumulate", format = "16", cache_dir, shard;
-  std::vector<std::string> images, frames;
+  std::vector<std::string> images, frames, camera_weights;
   double mm_per_px = 0, smoothness = LeastSquaresOptions{}.smoothness;
   double min_pixels = MaskOptions{}.min_pixels_per_cell, min_weight = MaskOptions{}.min_mean_weight;
   double trace_min_weight = TraceOptions{}.min_weight;
@@ -277,6 +278,24 @@ void run_several_cameras(const CorrectOptions& o) {
     if (!used.insert(ci).second) throw InputError("", "--frame", "camera '" + f.substr(0, eq) + "' given twice");
     per_camera.emplace_back(ci, expand_frames(f.substr(eq + 1)));
   }
+  // --camera-weight CAMERA=W: that camera's share in the sums (checked before any tracing).
+  std::map<std::string, double> weights;
+  for (const std::string& cw : o.camera_weights) {
+    const auto eq = cw.find('=');
+    double w = -1;
+    std::size_t used_chars = 0;
+    try {
+      if (eq != std::string::npos) w = std::stod(cw.substr(eq + 1), &used_chars);
+    } catch (const std::exception&) {
+      w = -1;
+    }
+    if (eq == std::string::npos || used_chars != cw.size() - eq - 1 || !(w >= 0) || !std::isfinite(w))
+      throw InputError("", "--camera-weight", fmt::format("'{}' is not CAMERA=W with W >= 0", cw));
+    bool found = false;
+    for (const auto& pc : per_camera) found = found || cs.scene.cameras[static_cast<std::size_t>(pc.first)].name == cw.substr(0, eq);
+    if (!found) throw InputError("", "--camera-weight", "camera '" + cw.substr(0, eq) + "' has no --frame");
+    weights[cw.substr(0, eq)] = w;
+  }
   const std::size_t count = per_camera.front().second.size();
   for (const auto& [ci, files] : per_camera)
     if (files.size() != count)
@@ -317,12 +336,14 @@ void run_several_cameras(const CorrectOptions& o) {
   std::printf("scene %s: %zu cameras, %zu frames each; sheet grid %dx%d cells of %.4g mm\n", o.scene.c_str(),
               per_camera.size(), count, grid.cols, grid.rows, grid.mm_per_px);
   for (const auto& pc : per_camera) add_correction_camera(cs, pc.first, grid, s);
-  const std::vector<CameraOperator> ops = camera_operators(cs);
+  std::vector<CameraOperator> ops = camera_operators(cs);
+  for (std::size_t k = 0; k < cs.cameras.size(); ++k)
+    if (weights.count(cs.cameras[k].name)) ops[k].weight = weights.at(cs.cameras[k].name);
   const std::vector<CellState> states = classify_cells(ops, cs.trace, s.mask);
   // Coverage count: cameras that could reconstruct each cell alone.
   std::vector<float> coverage(grid.cell_count(), 0.0f);
   for (std::size_t k = 0; k < ops.size(); ++k) {
-    const std::vector<CellState> own = classify_cells({ops[k]}, cs.trace, s.mask);
+    const std::vector<CellState> own = classify_cells({{ops[k].op, 1.0}}, cs.trace, s.mask);
     print_coverage(count_cells(own), ("camera '" + cs.cameras[k].name + "'").c_str());
     for (std::size_t c = 0; c < own.size(); ++c) coverage[c] += own[c] == CellState::valid ? 1.0f / 255 : 0.0f;
   }
@@ -367,7 +388,7 @@ void run_several_cameras(const CorrectOptions& o) {
         }
         std::vector<CameraImage> views;
         for (std::size_t k = 0; k < cs.cameras.size(); ++k)
-          views.push_back({&cs.cameras[k].op, f.images[k].values.data(), 1.0, background});
+          views.push_back({&cs.cameras[k].op, f.images[k].values.data(), ops[k].weight, background});
         f.result = back_projection(views, states);
         if (least) {
           LeastSquaresReport rep;
@@ -509,6 +530,8 @@ void register_correct_commands(CLI::App& app) {
   c->add_option("--camera", o->camera, "The camera of IMAGES (default: the scene's first)");
   c->add_option("--frame", o->frames,
                 "CAMERA=FILE, CAMERA=FOLDER or CAMERA=PATTERN, once per camera: several cameras, frames matched by index");
+  c->add_option("--camera-weight", o->camera_weights,
+                "CAMERA=W: that camera's share in a multi-camera reconstruction (default 1; 0 leaves it out)");
   CLI::Option* grid = c->add_option("--grid", o->grid, "camera (the same camera with the glass removed; one camera only) or sheet (mm grid)")
       ->check(CLI::IsMember({"camera", "sheet"}));
   add_common(c, *o);

@@ -181,7 +181,10 @@ expect_ok "$glasspiv" correct "$work/two.yaml" --frame "small=$work/frames/f1.ti
   -o "$work/both.tif" --method lsq
 [ -s "$work/both.tif" ] && [ -s "$work/both_mask.tif" ] && [ -s "$work/both_coverage.tif" ] && ok \
   || fail "two-camera correct wrote no image, mask or coverage"
-expect_ok "$glasspiv" correct "$work/two.yaml" --frame "small=$work/frames" --frame "side=$work/side/f*.tif" -o "$work/pairs"
+expect_ok "$glasspiv" correct "$work/two.yaml" --frame "small=$work/frames" --frame "side=$work/side/f*.tif" -o "$work/pairs" \
+  --camera-weight side=0.5
+expect_error 2 "--camera-weight" -- "$glasspiv" correct "$work/two.yaml" --frame "small=$work/frames/f1.tif" -o "$work/bad.tif" --camera-weight side=1
+expect_error 2 "--camera-weight" -- "$glasspiv" correct "$work/two.yaml" --frame "small=$work/frames/f1.tif" -o "$work/bad.tif" --camera-weight small=-1
 [ "$(ls "$work/pairs"/f*.tif | wc -l)" -eq 3 ] && ok || fail "two-camera series did not write three instants"
 expect_ok "$glasspiv" coverage "$work/two.yaml" -o "$work/coverage.png"
 [ -s "$work/coverage.png" ] && grep -q "together" "$work/out" && ok || fail "coverage wrote no picture or figures"
