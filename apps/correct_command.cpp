@@ -221,7 +221,7 @@ void run_one_camera(const CorrectOptions& o) {
   if (prepared && on_camera) read_cells = cells_read_by(resampler, grid.cell_count());
   const BackProjector projector =
       prepared ? make_back_projector(camera_operators(cs), states, on_camera ? &read_cells : nullptr) : BackProjector{};
-  ProgressBar bar("correct frames", frames.size());
+  ProgressBar bar("correct", frames.size(), "frames");
   const SeriesStats st = run_series<Frame>(
       frames,
       [&](std::size_t i) {
@@ -360,7 +360,7 @@ void run_several_cameras(const CorrectOptions& o) {
   const double background = cs.scene.background.radiance;
   const bool prepared = !least && background == 0;
   const BackProjector projector = prepared ? make_back_projector(ops, states) : BackProjector{};
-  ProgressBar bar("correct frames", frames.size());
+  ProgressBar bar("correct", frames.size(), "frames");
   int iterations = 0;
   const SeriesStats st = run_series<Frame>(
       frames,

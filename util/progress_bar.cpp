@@ -7,8 +7,9 @@
 
 namespace glasspiv {
 
-ProgressBar::ProgressBar(std::string label, std::size_t total)
+ProgressBar::ProgressBar(std::string label, std::size_t total, std::string rate_unit)
     : label_(std::move(label)),
+      rate_unit_(std::move(rate_unit)),
       total_(total),
       enabled_(::isatty(STDERR_FILENO) == 1),
       start_(std::chrono::steady_clock::now()),
@@ -45,6 +46,8 @@ void ProgressBar::draw(bool force) {
   const double elapsed_s = std::chrono::duration<double>(now - start_).count();
   std::fprintf(stderr, "\r%s [%s%s] %5.1f%% %6.1fs", label_.c_str(), std::string(filled, '#').c_str(),
                std::string(width - filled, '.').c_str(), 100.0 * fraction, elapsed_s);
+  if (!rate_unit_.empty() && elapsed_s > 0)
+    std::fprintf(stderr, " %.1f %s/s", static_cast<double>(done_) / elapsed_s, rate_unit_.c_str());
   std::fflush(stderr);
 }
 

@@ -9,7 +9,8 @@ namespace glasspiv {
 
 class ProgressBar {
  public:
-  ProgressBar(std::string label, std::size_t total);
+  // rate_unit (e.g. "frames"): also draw the rate, "12.3 frames/s".
+  ProgressBar(std::string label, std::size_t total, std::string rate_unit = "");
   ~ProgressBar();
   void advance(std::size_t steps = 1);
   // Absolute progress, for work that reports how much is done so far.
@@ -18,7 +19,7 @@ class ProgressBar {
 
  private:
   void draw(bool force);
-  std::string label_;
+  std::string label_, rate_unit_;
   std::size_t total_, done_ = 0;
   bool enabled_, finished_ = false;
   std::chrono::steady_clock::time_point start_, last_draw_;
