@@ -1,5 +1,9 @@
 #include "render/transport_map.h"
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
@@ -78,6 +82,9 @@ void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraMod
     out->background[static_cast<std::size_t>(col)] = static_cast<float>(background);
     out->opaque[static_cast<std::size_t>(col)] = static_cast<float>(opaque);
   }
+  // The row waits for the concatenation: keep no growth slack.
+  for (auto* v : {&out->s, &out->t, &out->w, &out->ds_dcol, &out->ds_drow, &out->dt_dcol, &out->dt_drow}) v->shrink_to_fit();
+  out->tag.shrink_to_fit();
 }
 
 }  // namespace
@@ -117,6 +124,7 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
   map.background_weight.reserve(map.pixel_count());
   map.opaque_weight.reserve(map.pixel_count());
   std::uint32_t offset = 0;
+  [[maybe_unused]] int rows_freed = 0;
   map.pixel_offsets.push_back(0);
   for (RowBuffer& rb : rows) {
     for (std::uint32_t c : rb.counts) map.pixel_offsets.push_back(offset += c);
@@ -140,6 +148,11 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
     map.stats.reflections_skipped += rb.reflections_skipped;
     map.stats.cut_weight += rb.cut_weight;
     rb = RowBuffer{};  // free as we go: peak memory ~ one copy
+#ifdef __GLIBC__
+    // The rows' small blocks go back to malloc's free lists, which the map's
+    // large arrays (mmapped) never reuse: hand the freed pages back to the system.
+    if (++rows_freed % 64 == 0) malloc_trim(0);
+#endif
   }
   map.stats.crossings = static_cast<long>(total);
   return map;
