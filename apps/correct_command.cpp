@@ -55,6 +55,13 @@ CorrectionSettings settings(const CorrectOptions& o, const std::string& default_
   return s;
 }
 
+LeastSquaresOptions least_squares_options(const CorrectOptions& o) {
+  LeastSquaresOptions lsq;
+  lsq.smoothness = o.smoothness;
+  lsq.max_iterations = o.max_iterations;
+  return lsq;
+}
+
 SheetGrid grid_for(const CorrectionScene& cs, double mm_per_px) {
   try {
     return sheet_grid_covering(cs.trace.sheet, mm_per_px);
@@ -210,9 +217,7 @@ void run_one_camera(const CorrectOptions& o) {
     write_grid_placement((fs::path(o.output) / "sheet_grid.yaml").string(), grid, cs);
   }
 
-  LeastSquaresOptions lsq;
-  lsq.smoothness = o.smoothness;
-  lsq.max_iterations = o.max_iterations;
+  const LeastSquaresOptions lsq = least_squares_options(o);
   const bool least = o.method == "lsq";
   const double background = cs.scene.background.radiance;
   // Back-projection prepared once: only the cells the output reads, already normalised.
@@ -353,9 +358,7 @@ void run_several_cameras(const CorrectOptions& o) {
   write_gray_image(coverage_path, coverage.data(), grid.cols, grid.rows, PixelFormat::uint8);
   write_grid_placement(stem + "sheet_grid.yaml", grid, cs);
 
-  LeastSquaresOptions lsq;
-  lsq.smoothness = o.smoothness;
-  lsq.max_iterations = o.max_iterations;
+  const LeastSquaresOptions lsq = least_squares_options(o);
   const bool least = o.method == "lsq";
   const double background = cs.scene.background.radiance;
   const bool prepared = !least && background == 0;

@@ -12,6 +12,7 @@
 #include "correct/reconstruct.h"
 #include "render/forward_render.h"
 #include "render/sheet_pattern.h"
+#include "sim/sheet_particles.h"
 #include "util/atomic_file.h"
 #include "util/image_file.h"
 #include "util/input_error.h"
@@ -24,32 +25,6 @@ namespace fs = std::filesystem;
 // PIV-like particles: 3 px images, 0.03 per px of the undistorted view.
 SheetPicture particles(const SheetPlane& sheet, double px_mm, double mm_per_texel) {
   return particle_picture(sheet.extent_s_mm, sheet.extent_t_mm, 0.03 / (px_mm * px_mm), 3 * px_mm, mm_per_texel, 11);
-}
-
-double rms_on_valid(const std::vector<float>& a, const std::vector<float>& b, const std::vector<CellState>& st) {
-  double s = 0, n = 0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (st[i] == CellState::valid) {
-      s += double(a[i] - b[i]) * (a[i] - b[i]);
-      ++n;
-    }
-  return n ? std::sqrt(s / n) : 0.0;
-}
-
-double ncc_on(const std::vector<float>& a, const std::vector<float>& b, const std::vector<std::uint8_t>& use) {
-  double sa = 0, sb = 0, n = 0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (use[i]) sa += a[i], sb += b[i], ++n;
-  if (n == 0) return 0;
-  const double ma = sa / n, mb = sb / n;
-  double ab = 0, aa = 0, bb = 0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (use[i]) {
-      ab += (a[i] - ma) * (b[i] - mb);
-      aa += (a[i] - ma) * (a[i] - ma);
-      bb += (b[i] - mb) * (b[i] - mb);
-    }
-  return ab / std::sqrt(aa * bb);
 }
 
 cv::Mat to8(const std::vector<float>& v, int w, int h, double gain) {
@@ -123,8 +98,8 @@ DemoCorrectionSummary run_correction_demo(const std::string& folder, const std::
     s.correct_ms = 1e3 * per_frame.seconds();
     const std::vector<float> l_lsq = least_squares(views, states, l);
     resample_to_camera(resampler, l_lsq.data(), corrected_lsq.data());
-    s.one_ncc = ncc_on(corrected, reference, resampler.pixel_valid);
-    s.one_lsq_ncc = ncc_on(corrected_lsq, reference, resampler.pixel_valid);
+    s.one_ncc = ncc_where(corrected, reference, resampler.pixel_valid);
+    s.one_lsq_ncc = ncc_where(corrected_lsq, reference, resampler.pixel_valid);
     if (truth.cols != grid.cols || truth.rows != grid.rows) throw std::logic_error("demo: truth not on the grid");
 
     s.corrected_tif = (out / "reactor_corrected.tif").string();
@@ -168,8 +143,8 @@ DemoCorrectionSummary run_correction_demo(const std::string& folder, const std::
     LeastSquaresReport rep;
     const std::vector<float> lsq = least_squares(views, together, acc, {}, &rep);
     s.lsq_iterations = rep.iterations;
-    s.accumulation_rms = rms_on_valid(acc, truth.values, together);
-    s.lsq_rms = rms_on_valid(lsq, truth.values, together);
+    s.accumulation_rms = rms_difference_where(acc, truth.values, valid_cells(together));
+    s.lsq_rms = rms_difference_where(lsq, truth.values, valid_cells(together));
     std::vector<float> valid(together.size());
     for (std::size_t i = 0; i < valid.size(); ++i) valid[i] = together[i] == CellState::valid;
     s.five_png = (out / "reactor_5cams_truth_accumulation_lsq.png").string();

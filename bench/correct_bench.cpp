@@ -34,6 +34,7 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "bench/bench_common.h"
 #include "correct/back_projector.h"
 #include "correct/camera_resampler.h"
 #include "correct/cell_mask.h"
@@ -47,42 +48,20 @@
 #include "render/sheet_texture.h"
 #include "render/trace_scene_builder.h"
 #include "render/transport_map.h"
+#include "sim/sheet_particles.h"
 #include "util/image_file.h"
 #include "util/stopwatch.h"
 
 using namespace glasspiv;
+using bench::median;
+using bench::peak_rss_mib;
+using bench::seconds_of;
+using bench::square;
 namespace fs = std::filesystem;
 
 namespace {
 
-double peak_rss_mib() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return u.ru_maxrss / 1024.0;  // Linux: KiB
-}
-
 double mib(std::size_t bytes) { return bytes / 1048576.0; }
-
-CameraModel square(const CameraModel& m, int n) {
-  const double k = static_cast<double>(n) / m.height_px();
-  const double crop = 0.5 * (m.width_px() - m.height_px());  // columns cut on each side
-  return CameraModel(n, n, m.fx_px() * k, m.fy_px() * k, (m.cx_px() + 0.5 - crop) * k - 0.5, (m.cy_px() + 0.5) * k - 0.5,
-                     m.distortion());
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-template <typename Fn>
-double seconds_of(const Fn& fn) {
-  const Stopwatch clock;
-  fn();
-  return clock.seconds();
-}
 
 // A markdown table printed with aligned columns: text left, figures right.
 class Table {
@@ -130,67 +109,10 @@ std::string fmt(const char* f, double v) {
 // the sheet, rendered through the map with the footprint-filtered texture
 // lookup (independent of the operator), then corrected.
 
-struct Particle {
-  double s_mm, t_mm;
-};
-
-struct ParticleField {
-  std::vector<Particle> particles;
-  double diameter_mm = 1;  // 1/e^2 diameter
-
-  // Point samples at the cell centres of a grid.
-  std::vector<float> on(const SheetGrid& g) const {
-    std::vector<float> v(g.cell_count(), 0.0f);
-    const double reach = 2 * diameter_mm, r2 = 0.25 * diameter_mm * diameter_mm;
-    for (const Particle& p : particles) {
-      const int c0 = std::max(0, int(std::floor(g.col(p.s_mm - reach)))), c1 = std::min(g.cols - 1, int(std::ceil(g.col(p.s_mm + reach))));
-      const int r0 = std::max(0, int(std::floor(g.row(p.t_mm + reach)))), r1 = std::min(g.rows - 1, int(std::ceil(g.row(p.t_mm - reach))));
-      for (int r = r0; r <= r1; ++r)
-        for (int c = c0; c <= c1; ++c) {
-          const double ds = g.s_mm(c) - p.s_mm, dt = g.t_mm(r) - p.t_mm;
-          v[static_cast<std::size_t>(r) * g.cols + c] += static_cast<float>(std::exp(-2 * (ds * ds + dt * dt) / r2));
-        }
-    }
-    return v;
-  }
-};
-
-ParticleField particles(const SheetPlane& sheet, double per_mm2, double diameter_mm, std::uint64_t seed) {
-  ParticleField f;
-  f.diameter_mm = diameter_mm;
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> us(-0.5 * sheet.extent_s_mm, 0.5 * sheet.extent_s_mm),
-      ut(-0.5 * sheet.extent_t_mm, 0.5 * sheet.extent_t_mm);
-  const auto n = static_cast<long>(per_mm2 * sheet.extent_s_mm * sheet.extent_t_mm);
-  for (long i = 0; i < n; ++i) f.particles.push_back({us(rng), ut(rng)});
-  return f;
-}
-
-SheetTexture fine_texture(const ParticleField& f, const SheetPlane& sheet, double mm_per_texel) {
-  const SheetGrid fine = sheet_grid_covering(sheet, mm_per_texel);
-  const std::vector<float> v = f.on(fine);
-  return SheetTexture(v.data(), fine.rows, fine.cols, fine.mm_per_px);
-}
-
 bool is_valid(CellState s) { return s == CellState::valid; }
 
 double ncc(const std::vector<float>& a, const std::vector<float>& b, const std::vector<CellState>& states) {
-  double sa = 0, sb = 0, n = 0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (is_valid(states[i])) {
-      sa += a[i];
-      sb += b[i];
-      ++n;
-    }
-  const double ma = sa / n, mb = sb / n;
-  double ab = 0, aa = 0, bb = 0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (is_valid(states[i])) {
-      ab += (a[i] - ma) * (b[i] - mb);
-      aa += (a[i] - ma) * (a[i] - ma);
-      bb += (b[i] - mb) * (b[i] - mb);
-    }
-  return ab / std::sqrt(aa * bb);
+  return ncc_where(a, b, valid_cells(states));
 }
 
 template <typename A, typename B>
@@ -204,69 +126,9 @@ double rms_error(const std::vector<A>& a, const std::vector<B>& truth, const std
   return n ? std::sqrt(s / n) : 0.0;
 }
 
-// Mean distance (cells) between the intensity centroid in a window around each
-// isolated particle whose window is all valid, and its true place.
-double mean_centroid_error_cells(const std::vector<float>& l, const ParticleField& f, const SheetGrid& g,
+double mean_centroid_error_cells(const std::vector<float>& l, const SheetParticles& f, const SheetGrid& g,
                                  const std::vector<CellState>& states, int* counted) {
-  const int half = static_cast<int>(std::ceil(f.diameter_mm / g.mm_per_px));
-  // Isolation by a coarse bucket grid (the field has thousands of particles).
-  const double cell = 3 * f.diameter_mm;
-  double smin = 1e300, tmin = 1e300;
-  for (const Particle& p : f.particles) {
-    smin = std::min(smin, p.s_mm);
-    tmin = std::min(tmin, p.t_mm);
-  }
-  std::vector<std::vector<int>> bucket;
-  int bc = 1, br = 1;
-  {
-    double smax = -1e300, tmax = -1e300;
-    for (const Particle& p : f.particles) {
-      smax = std::max(smax, p.s_mm);
-      tmax = std::max(tmax, p.t_mm);
-    }
-    bc = std::max(1, int((smax - smin) / cell) + 1);
-    br = std::max(1, int((tmax - tmin) / cell) + 1);
-    bucket.resize(static_cast<std::size_t>(bc) * br);
-    for (std::size_t k = 0; k < f.particles.size(); ++k) {
-      const int x = int((f.particles[k].s_mm - smin) / cell), y = int((f.particles[k].t_mm - tmin) / cell);
-      bucket[static_cast<std::size_t>(y) * bc + x].push_back(static_cast<int>(k));
-    }
-  }
-  double sum = 0;
-  int n = 0;
-  for (std::size_t k = 0; k < f.particles.size(); ++k) {
-    const Particle& p = f.particles[k];
-    bool isolated = true;
-    const int bx = int((p.s_mm - smin) / cell), by = int((p.t_mm - tmin) / cell);
-    for (int y = std::max(0, by - 1); y <= std::min(br - 1, by + 1) && isolated; ++y)
-      for (int x = std::max(0, bx - 1); x <= std::min(bc - 1, bx + 1) && isolated; ++x)
-        for (int j : bucket[static_cast<std::size_t>(y) * bc + x])
-          if (j != static_cast<int>(k) &&
-              std::hypot(f.particles[j].s_mm - p.s_mm, f.particles[j].t_mm - p.t_mm) <= 3 * f.diameter_mm) {
-            isolated = false;
-            break;
-          }
-    if (!isolated) continue;
-    const double x = g.col(p.s_mm), y = g.row(p.t_mm);
-    const int cx = static_cast<int>(std::lround(x)), cy = static_cast<int>(std::lround(y));
-    if (cx - half < 0 || cy - half < 0 || cx + half >= g.cols || cy + half >= g.rows) continue;
-    bool ok = true;
-    double w = 0, wx = 0, wy = 0;
-    for (int r = cy - half; r <= cy + half && ok; ++r)
-      for (int c = cx - half; c <= cx + half && ok; ++c) {
-        const std::size_t i = static_cast<std::size_t>(r) * g.cols + c;
-        ok = is_valid(states[i]);
-        const double v = std::max(0.0f, l[i]);
-        w += v;
-        wx += v * c;
-        wy += v * r;
-      }
-    if (!ok || w <= 0) continue;
-    sum += std::hypot(wx / w - x, wy / w - y);
-    ++n;
-  }
-  *counted = n;
-  return n ? sum / n : std::nan("");
+  return glasspiv::mean_centroid_error_cells(l, f, g, valid_cells(states), counted);
 }
 
 // The back-projection in double straight from the map's crossings, each
@@ -410,8 +272,8 @@ int main(int argc, char** argv) {
   // The frame: a particle field rendered through the glass (reconstruct_test's round trip).
   const double mm = su.footprint_mm;
   std::fprintf(stderr, "rendering the particle frames ...\n");
-  const ParticleField field = particles(ts.sheet, 0.03 / (mm * mm), 3 * mm, 7);
-  const SheetTexture fine = fine_texture(field, ts.sheet, mm / 4);
+  const SheetParticles field = random_sheet_particles(ts.sheet, 0.03 / (mm * mm), 3 * mm, 7);
+  const SheetTexture fine = field.texture(ts.sheet, mm / 4);
   const std::vector<float> image = forward_render_values(map, fine);
   const std::vector<float> truth = field.on(grid);
   const SheetTexture on_grid(truth.data(), grid.rows, grid.cols, grid.mm_per_px);
@@ -556,7 +418,7 @@ int main(int argc, char** argv) {
       const int distinct = std::min(frames, 8);
       std::vector<std::vector<float>> inputs;
       for (int k = 0; k < distinct; ++k) {
-        const ParticleField f = particles(ts.sheet, 0.03 / (mm * mm), 3 * mm, 100 + k);
+        const SheetParticles f = random_sheet_particles(ts.sheet, 0.03 / (mm * mm), 3 * mm, 100 + k);
         const std::vector<float> sheet = f.on(grid);
         std::vector<float> img(map.pixel_count());
         apply_forward(op, sheet.data(), 0.0, img.data());
@@ -630,12 +492,12 @@ int main(int argc, char** argv) {
   }
   const Setup& tsu = *tsp;
   const double tmm = tsu.footprint_mm;
-  const ParticleField tfield = table_size == size ? field : particles(ts.sheet, 0.03 / (tmm * tmm), 3 * tmm, 7);
-  const ParticleField sparse = particles(ts.sheet, 0.003 / (tmm * tmm), 3 * tmm, 8);
+  const SheetParticles tfield = table_size == size ? field : random_sheet_particles(ts.sheet, 0.03 / (tmm * tmm), 3 * tmm, 7);
+  const SheetParticles sparse = random_sheet_particles(ts.sheet, 0.003 / (tmm * tmm), 3 * tmm, 8);
   std::fprintf(stderr, "table: rendering the frames (%dx%d) ...\n", table_size, table_size);
   const std::vector<float> timage =
-      table_size == size ? image : forward_render_values(tsu.map, fine_texture(tfield, ts.sheet, tmm / 4));
-  const std::vector<float> simage = forward_render_values(tsu.map, fine_texture(sparse, ts.sheet, tmm / 4));
+      table_size == size ? image : forward_render_values(tsu.map, tfield.texture(ts.sheet, tmm / 4));
+  const std::vector<float> simage = forward_render_values(tsu.map, sparse.texture(ts.sheet, tmm / 4));
   const int treps = std::max(1, std::min(reps, 5));
   auto centroid = [](double e, int n) { return n ? fmt("%.4f", e) + " (" + std::to_string(n) + ")" : std::string("n/a (0)"); };
   Table t5({"pitch", "footprint filter", "taps_by_weight", "values", "build s", "entries/px", "correct ms/frame",

@@ -45,6 +45,7 @@
 #include <variant>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "render/parallel_rows.h"
 #include "render/path_tracer.h"
 #include "render/scene_yaml.h"
@@ -53,27 +54,11 @@
 #include "util/stopwatch.h"
 
 using namespace glasspiv;
+using bench::peak_rss_mib;
+using bench::square;
+using bench::median;
 
 namespace {
-
-double peak_rss_mib() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return u.ru_maxrss / 1024.0;  // Linux: KiB
-}
-
-CameraModel square(const CameraModel& m, int n) {
-  const double k = static_cast<double>(n) / m.height_px();
-  const double crop = 0.5 * (m.width_px() - m.height_px());  // columns cut on each side
-  return CameraModel(n, n, m.fx_px() * k, m.fy_px() * k, (m.cx_px() + 0.5 - crop) * k - 0.5, (m.cy_px() + 0.5) * k - 0.5,
-                     m.distortion());
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // ---------------------------------------------------------------------------
 // The bare tracer.

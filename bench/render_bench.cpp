@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench/bench_common.h"
 #include "render/forward_render.h"
 #include "render/path_tracer.h"
 #include "render/scene_yaml.h"
@@ -23,21 +24,10 @@
 #include "util/stopwatch.h"
 
 using namespace glasspiv;
+using bench::peak_rss_mib;
+using bench::square;
 
 namespace {
-
-double peak_rss_mib() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return u.ru_maxrss / 1024.0;  // Linux: KiB
-}
-
-CameraModel square(const CameraModel& m, int n) {
-  const double k = static_cast<double>(n) / m.height_px();
-  const double crop = 0.5 * (m.width_px() - m.height_px());  // columns cut on each side
-  return CameraModel(n, n, m.fx_px() * k, m.fy_px() * k, (m.cx_px() + 0.5 - crop) * k - 0.5, (m.cy_px() + 0.5) * k - 0.5,
-                     m.distortion());
-}
 
 double rms_difference(const std::vector<float>& a, const std::vector<float>& b) {
   double sum = 0;

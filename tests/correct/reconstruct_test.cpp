@@ -12,127 +12,17 @@
 #include "correct/camera_resampler.h"
 #include "correct/cell_mask.h"
 #include "render/forward_render.h"
+#include "sim/sheet_particles.h"
 #include "tests/correct/test_scenes.h"
 
 namespace glasspiv {
 namespace {
 
-struct Particle {
-  double s_mm, t_mm;
-};
-
-// Gaussian particles (1/e^2 diameter) at uniform random places of the sheet.
-struct ParticleField {
-  std::vector<Particle> particles;
-  double diameter_mm = 1;
-
-  double at(double s, double t) const {
-    const double r2 = 0.25 * diameter_mm * diameter_mm;
-    double v = 0;
-    for (const Particle& p : particles) {
-      const double ds = s - p.s_mm, dt = t - p.t_mm;
-      if (std::abs(ds) < 2 * diameter_mm && std::abs(dt) < 2 * diameter_mm) v += std::exp(-2 * (ds * ds + dt * dt) / r2);
-    }
-    return v;
-  }
-  // Point samples at the cell centres of a grid.
-  std::vector<float> on(const SheetGrid& g) const {
-    std::vector<float> v(g.cell_count(), 0.0f);
-    const double reach = 2 * diameter_mm, r2 = 0.25 * diameter_mm * diameter_mm;
-    for (const Particle& p : particles) {
-      const int c0 = std::max(0, int(std::floor(g.col(p.s_mm - reach)))), c1 = std::min(g.cols - 1, int(std::ceil(g.col(p.s_mm + reach))));
-      const int r0 = std::max(0, int(std::floor(g.row(p.t_mm + reach)))), r1 = std::min(g.rows - 1, int(std::ceil(g.row(p.t_mm - reach))));
-      for (int r = r0; r <= r1; ++r)
-        for (int c = c0; c <= c1; ++c) {
-          const double ds = g.s_mm(c) - p.s_mm, dt = g.t_mm(r) - p.t_mm;
-          v[static_cast<std::size_t>(r) * g.cols + c] += static_cast<float>(std::exp(-2 * (ds * ds + dt * dt) / r2));
-        }
-    }
-    return v;
-  }
-};
-
-ParticleField particles(const SheetPlane& sheet, double per_mm2, double diameter_mm, std::uint64_t seed) {
-  ParticleField f;
-  f.diameter_mm = diameter_mm;
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> us(-0.5 * sheet.extent_s_mm, 0.5 * sheet.extent_s_mm),
-      ut(-0.5 * sheet.extent_t_mm, 0.5 * sheet.extent_t_mm);
-  const auto n = static_cast<long>(per_mm2 * sheet.extent_s_mm * sheet.extent_t_mm);
-  for (long i = 0; i < n; ++i) f.particles.push_back({us(rng), ut(rng)});
-  return f;
-}
-
-// Normalised cross-correlation of a and b over the valid cells.
 double ncc(const std::vector<float>& a, const std::vector<float>& b, const std::vector<CellState>& states) {
-  double sa = 0, sb = 0, n = 0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (states[i] == CellState::valid) {
-      sa += a[i];
-      sb += b[i];
-      ++n;
-    }
-  const double ma = sa / n, mb = sb / n;
-  double ab = 0, aa = 0, bb = 0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (states[i] == CellState::valid) {
-      ab += (a[i] - ma) * (b[i] - mb);
-      aa += (a[i] - ma) * (a[i] - ma);
-      bb += (b[i] - mb) * (b[i] - mb);
-    }
-  return ab / std::sqrt(aa * bb);
+  return ncc_where(a, b, valid_cells(states));
 }
-
-double rms_error(const std::vector<float>& a, const std::vector<float>& truth, const std::vector<CellState>& states) {
-  double s = 0, n = 0;
-  for (std::size_t i = 0; i < a.size(); ++i)
-    if (states[i] == CellState::valid) {
-      s += double(a[i] - truth[i]) * (a[i] - truth[i]);
-      ++n;
-    }
-  return std::sqrt(s / n);
-}
-
-// Mean distance (cells) between the intensity centroid of `l` in a window
-// around each isolated particle whose window is all valid, and its true place.
-double mean_centroid_error_px(const std::vector<float>& l, const ParticleField& f, const SheetGrid& g,
-                              const std::vector<CellState>& states, int* counted) {
-  const int half = static_cast<int>(std::ceil(f.diameter_mm / g.mm_per_px));
-  double sum = 0;
-  int n = 0;
-  for (std::size_t k = 0; k < f.particles.size(); ++k) {
-    const Particle& p = f.particles[k];
-    bool isolated = true;
-    for (std::size_t j = 0; j < f.particles.size() && isolated; ++j)
-      isolated = j == k || std::hypot(f.particles[j].s_mm - p.s_mm, f.particles[j].t_mm - p.t_mm) > 3 * f.diameter_mm;
-    if (!isolated) continue;
-    const double x = g.col(p.s_mm), y = g.row(p.t_mm);
-    const int cx = static_cast<int>(std::lround(x)), cy = static_cast<int>(std::lround(y));
-    if (cx - half < 0 || cy - half < 0 || cx + half >= g.cols || cy + half >= g.rows) continue;
-    bool ok = true;
-    double w = 0, wx = 0, wy = 0;
-    for (int r = cy - half; r <= cy + half && ok; ++r)
-      for (int c = cx - half; c <= cx + half && ok; ++c) {
-        const std::size_t i = static_cast<std::size_t>(r) * g.cols + c;
-        ok = states[i] == CellState::valid;
-        const double v = std::max(0.0f, l[i]);
-        w += v;
-        wx += v * c;
-        wy += v * r;
-      }
-    if (!ok || w <= 0) continue;
-    sum += std::hypot(wx / w - x, wy / w - y);
-    ++n;
-  }
-  *counted = n;
-  return n ? sum / n : 1e9;
-}
-
-// The texture for the forward render: the field sampled 4x finer than the grid.
-SheetTexture fine_texture(const ParticleField& f, const SheetPlane& sheet, double mm_per_texel) {
-  const SheetGrid fine = sheet_grid_covering(sheet, mm_per_texel);
-  const std::vector<float> v = f.on(fine);
-  return SheetTexture(v.data(), fine.rows, fine.cols, fine.mm_per_px);
+double rms_error(const std::vector<float>& a, const std::vector<float>& b, const std::vector<CellState>& states) {
+  return rms_difference_where(a, b, valid_cells(states));
 }
 
 TEST(Reconstruct, OneCameraRoundTripThroughTheReactor) {
@@ -142,8 +32,8 @@ TEST(Reconstruct, OneCameraRoundTripThroughTheReactor) {
   const double mm = median_footprint_mm(direct);  // the camera's own pixel on the sheet
   const SheetGrid grid = sheet_grid_covering(s.trace.sheet, mm);
   // PIV-like particles: 3 px images, 0.03 particles per px of the undistorted view.
-  const ParticleField field = particles(s.trace.sheet, 0.03 / (mm * mm), 3 * mm, 7);
-  const std::vector<float> image = forward_render_values(map, fine_texture(field, s.trace.sheet, mm / 4));
+  const SheetParticles field = random_sheet_particles(s.trace.sheet, 0.03 / (mm * mm), 3 * mm, 7);
+  const std::vector<float> image = forward_render_values(map, field.texture(s.trace.sheet, mm / 4));
 
   const CorrectionOperator op = build_correction_operator(map, grid);
   const std::vector<CellState> states = classify_cells({{&op, 1.0}}, s.trace);
@@ -154,11 +44,11 @@ TEST(Reconstruct, OneCameraRoundTripThroughTheReactor) {
   for (std::size_t i = 0; i < l.size(); ++i) ASSERT_NEAR(weighted[i], l[i], 1e-5f * (1 + std::abs(l[i])));
   const std::vector<float> truth = field.on(grid);
   // Centroids on a sparse field of the same particles: isolated ones.
-  const ParticleField sparse = particles(s.trace.sheet, 0.003 / (mm * mm), 3 * mm, 8);
-  const std::vector<float> sparse_image = forward_render_values(map, fine_texture(sparse, s.trace.sheet, mm / 4));
+  const SheetParticles sparse = random_sheet_particles(s.trace.sheet, 0.003 / (mm * mm), 3 * mm, 8);
+  const std::vector<float> sparse_image = forward_render_values(map, sparse.texture(s.trace.sheet, mm / 4));
   int n = 0;
   const double centroid =
-      mean_centroid_error_px(back_projection({{&op, sparse_image.data()}}, states), sparse, grid, states, &n);
+      mean_centroid_error_cells(back_projection({{&op, sparse_image.data()}}, states), sparse, grid, valid_cells(states), &n);
   const double c = ncc(l, truth, states);
   std::printf("one camera: grid %dx%d at %.3f mm; valid %.1f%% of the fluid region (never seen %zu, few pixels %zu, "
               "low weight %zu, mostly reflected %zu cells); NCC %.4f; centroid error %.4f px over %d particles\n",
@@ -193,8 +83,8 @@ TEST(Reconstruct, FiveCamerasFillTheRimsAndLeastSquaresRemovesGhosts) {
   const TraceScene& trace = setups[0].trace;
   const double mm = median_footprint_mm(glass_removed_map(trace, setups[1].camera, setups[1].pose, 1, 2));
   const SheetGrid grid = sheet_grid_covering(trace.sheet, mm);
-  const ParticleField field = particles(trace.sheet, 0.03 / (mm * mm), 3 * mm, 9);
-  const SheetTexture texture = fine_texture(field, trace.sheet, mm / 4);
+  const SheetParticles field = random_sheet_particles(trace.sheet, 0.03 / (mm * mm), 3 * mm, 9);
+  const SheetTexture texture = field.texture(trace.sheet, mm / 4);
   std::vector<CorrectionOperator> ops;
   std::vector<std::vector<float>> images;
   std::vector<CameraOperator> cams;
