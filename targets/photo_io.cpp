@@ -3,9 +3,9 @@
 #include <filesystem>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "util/image_file.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
@@ -29,18 +29,30 @@ cv::Mat read_photo_gray8(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "", "file does not exist");
   if (fs::is_directory(path, ec)) throw InputError(path, "", "is a folder, expected an image");
-  cv::Mat image;
+  // util/image_file's reader, as for PIV frames: the size limits are checked
+  // from the header, damaged or truncated files are refused, nothing is printed.
+  StoredImage stored;
   try {
-    image = cv::imread(path, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception& e) {
-    throw InputError(path, "", std::string("cannot be read as an image: ") + e.what());
+    stored = read_stored_image(path);
+  } catch (const InputError& e) {
+    throw InputError(path, "", "cannot be read as an image: " + e.problem());
   }
-  if (image.empty()) throw InputError(path, "", "cannot be read as an image (not an image, corrupt, or unreadable)");
-  cv::Mat gray = to_gray8(image);
-  if (gray.empty())
-    throw InputError(path, "",
-                     fmt::format("has {} channels; expected grey, colour or colour with alpha", image.channels()));
-  return gray;
+  void* data = nullptr;
+  int depth = CV_8U;
+  switch (stored.format) {
+    case PixelFormat::uint8: data = stored.uint8.data(); depth = CV_8U; break;
+    case PixelFormat::uint16: data = stored.uint16.data(); depth = CV_16U; break;
+    case PixelFormat::float32: data = stored.float32.data(); depth = CV_32F; break;
+  }
+  if (stored.channels != 1 && stored.channels != 3)  // read_stored_image gives 1 or 3
+    throw InputError(path, "", fmt::format("has {} channels; expected grey or colour", stored.channels));
+  // A view of the stored samples; the result below owns its own copy.
+  const cv::Mat view(stored.height, stored.width, CV_MAKETYPE(depth, stored.channels), data);
+  cv::Mat gray;
+  if (stored.channels == 3) cv::cvtColor(view, gray, cv::COLOR_RGB2GRAY);  // OIIO gives R, G, B
+  else gray = view;
+  gray = to_gray8(gray);
+  return gray.data == view.data ? gray.clone() : gray;
 }
 
 }  // namespace glasspiv

@@ -10,8 +10,13 @@
 #include <memory>
 #include <sstream>
 #include <stdexcept>
-#include <type_traits>
+#include <mutex>
+#include <utility>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
 #include <OpenImageIO/imageio.h>
 
 #include "util/atomic_file.h"
@@ -49,10 +54,62 @@ std::string one_line(const std::string& text) {
 }
 
 // libpng (as OpenImageIO 2.4 drives it) prints "libpng error: ..." to stderr
-// before OIIO reports the error. Truncation, the usual damage (an interrupted
-// copy), is caught here first by walking the chunk headers, which costs a few
-// hundred 8-byte reads, not a pass over the pixels.
-void check_png_is_complete(const std::string& path) {
+// besides reporting the error to OIIO, and other decoders may do likewise; the
+// command line's only output for a bad file must be its one-line InputError.
+// While an image file is opened or read, file descriptor 2 points to /dev/null
+// (OIIO's error strings carry the message). Nested and concurrent reads share
+// one redirection; glasspiv prints nothing from other threads while reading.
+class QuietStderr {
+ public:
+  QuietStderr() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (depth_++ > 0) return;
+    std::fflush(stderr);
+    const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (null < 0) return;
+    saved_ = ::fcntl(STDERR_FILENO, F_DUPFD_CLOEXEC, 3);
+    if (saved_ >= 0 && ::dup2(null, STDERR_FILENO) < 0) {
+      ::close(saved_);
+      saved_ = -1;
+    }
+    ::close(null);
+  }
+  ~QuietStderr() {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (--depth_ > 0 || saved_ < 0) return;
+    std::fflush(stderr);
+    ::dup2(saved_, STDERR_FILENO);
+    ::close(saved_);
+    saved_ = -1;
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+ private:
+  static inline std::mutex mutex_;
+  static inline int depth_ = 0;
+  static inline int saved_ = -1;
+};
+
+// The one size check of every read, from the header: before any pixel buffer.
+void check_size_limits(const std::string& path, std::int64_t width, std::int64_t height, const char* what) {
+  if (width <= kMaxImageSidePx && height <= kMaxImageSidePx && width * height <= kMaxImagePixels) return;
+  throw InputError(path, "",
+                   fmt::format("{} {} x {} px, over the limit of {} px a side and {} px in all", what, width,
+                               height, kMaxImageSidePx, kMaxImagePixels));
+}
+
+std::uint32_t big_endian_32(const unsigned char* b) {
+  return (std::uint32_t{b[0]} << 24) | (std::uint32_t{b[1]} << 16) | (std::uint32_t{b[2]} << 8) | b[3];
+}
+
+// A PNG's own header, checked before OIIO (libpng) sees the file, by walking
+// the chunk headers (a few hundred 8-byte reads, not a pass over the pixels):
+// truncation (the usual damage: an interrupted copy) is named as such, and a
+// header claiming more pixels than the limits, or than its compressed data can
+// hold (deflate expands at most 1032-fold), is refused before anything is
+// allocated for the pixels. Anything else wrong is left to OIIO.
+void check_png_header(const std::string& path) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) return;  // OIIO says why
   std::setvbuf(file.get(), nullptr, _IONBF, 0);  // headers only: don't buffer the data between them
@@ -63,35 +120,88 @@ void check_png_is_complete(const std::string& path) {
   const std::uintmax_t size = fs::file_size(path, ec);
   if (ec) return;
   std::uintmax_t chunk = 8;  // length (4 bytes, big-endian), type (4), data, CRC (4)
+  std::uintmax_t idat_bytes = 0;
+  std::uint32_t width = 0, height = 0;
+  int bit_depth = 0, colour_type = -1;
   for (;;) {
     if (chunk + 8 > size || std::fseek(file.get(), static_cast<long>(chunk), SEEK_SET) != 0 ||
         std::fread(header, 1, 8, file.get()) != 8)
       break;
-    const std::uintmax_t length = (std::uintmax_t{header[0]} << 24) | (std::uintmax_t{header[1]} << 16) |
-                                  (std::uintmax_t{header[2]} << 8) | header[3];
-    chunk += 12 + length;
+    const std::uint32_t length = big_endian_32(header);
+    if (chunk == 8 && std::memcmp(header + 4, "IHDR", 4) == 0 && length == 13) {
+      unsigned char ihdr[13];
+      if (std::fread(ihdr, 1, 13, file.get()) != 13) break;
+      width = big_endian_32(ihdr);
+      height = big_endian_32(ihdr + 4);
+      bit_depth = ihdr[8];
+      colour_type = ihdr[9];
+    }
+    if (std::memcmp(header + 4, "IDAT", 4) == 0) idat_bytes += length;
+    chunk += 12 + std::uintmax_t{length};
     if (chunk > size) break;
-    if (std::memcmp(header + 4, "IEND", 4) == 0) return;
+    if (std::memcmp(header + 4, "IEND", 4) != 0) continue;
+    if (colour_type < 0) return;  // no IHDR first: OIIO says what is wrong
+    check_size_limits(path, width, height, "the PNG header states");
+    const int samples = colour_type == 2 ? 3 : colour_type == 4 ? 2 : colour_type == 6 ? 4 : 1;
+    // Non-interlaced size (an interlaced stream is larger): a filter byte per row.
+    const std::uintmax_t needed =
+        std::uintmax_t{height} * (1 + (std::uintmax_t{width} * samples * bit_depth + 7) / 8);
+    if (needed > 1032 * idat_bytes)
+      throw InputError(path, "",
+                       fmt::format("the PNG header states {} x {} px, {} bytes of image data, but its {} compressed "
+                                   "bytes can hold at most {} (deflate expands at most 1032-fold): damaged file",
+                                   width, height, needed, idat_bytes, 1032 * idat_bytes));
+    return;
   }
   throw InputError(path, "", "truncated PNG file (it ends before its IEND chunk)");
 }
 
-// Reads the first `channels` channels of subimage 0 as T and reduces them to
-// gray. OIIO's own conversion to float multiplies by 1/255 resp. 1/65535 and
-// misses the float nearest k / 65535 by one ulp for some levels; reading the
-// stored integers and dividing here gets every level exactly, and is no slower.
+// Opens `path` for reading, refused past the limits before anything is read
+// beyond the header. The caller holds a QuietStderr.
+std::unique_ptr<OIIO::ImageInput> open_checked(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, "", "file does not exist");
+  if (fs::is_directory(path, ec)) throw InputError(path, "", "is a folder, expected an image file");
+  check_png_header(path);
+
+  OIIO::ImageSpec config;
+  // PNG and TIFF store colour unassociated with alpha; OIIO would multiply it by
+  // alpha on reading, but alpha is ignored here, so keep the colour as stored.
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = OIIO::ImageInput::open(path, &config);
+  if (!in) fail(path, OIIO::geterror(), "not an image file OpenImageIO can read");
+  in->geterror();  // errors OIIO noted but opened anyway are not fatal; those of reading the pixels are
+  const OIIO::ImageSpec& spec = in->spec();
+  if (spec.deep) throw InputError(path, "", "deep images are not supported");
+  if (spec.depth != 1) throw InputError(path, "", "volume images (depth > 1) are not supported");
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+    throw InputError(path, "", "the image is empty");
+  check_size_limits(path, spec.width, spec.height, "the image is");
+  if (spec.tile_width > 0) check_size_limits(path, spec.tile_width, spec.tile_height, "its tiles are");
+  return in;
+}
+
+// Reads the first `channels` channels of subimage 0 as T.
 template <typename T>
-std::vector<float> read_gray(OIIO::ImageInput& in, const std::string& path, int channels, float full_scale) {
+std::vector<T> read_stored(OIIO::ImageInput& in, const std::string& path, int channels) {
   const std::size_t count = std::size_t(in.spec().width) * std::size_t(in.spec().height);
   std::vector<T> stored(count * std::size_t(channels));
-  // OIIO 2.4 reports a truncated TIFF's unreadable strips as errors but still
-  // returns true, with those rows left unset: check both.
+  // OIIO 2.4 reports a truncated TIFF's unreadable strips, and a truncated
+  // JPEG, as errors but still returns true, with those rows left unset (resp.
+  // grey): check both.
   if (!in.read_image(0, 0, 0, channels, OIIO::TypeDesc(OIIO::BaseTypeFromC<T>::value), stored.data()) ||
       in.has_error())
     fail(path, in.geterror(), "cannot read the pixels");
-  if constexpr (std::is_same_v<T, float>) {
-    if (channels == 1) return stored;  // full_scale is 1: nothing to do
-  }
+  return stored;
+}
+
+// Gray from stored samples. OIIO's own conversion to float multiplies by 1/255
+// resp. 1/65535 and misses the float nearest k / 65535 by one ulp for some
+// levels; reading the stored integers and dividing here gets every level
+// exactly, and is no slower.
+template <typename T>
+std::vector<float> gray_of(const std::vector<T>& stored, int channels, float full_scale) {
+  const std::size_t count = stored.size() / std::size_t(channels);
   const auto value = [full_scale](T v) { return static_cast<float>(v) / full_scale; };
   std::vector<float> gray(count);
   if (channels == 1) {
@@ -135,50 +245,52 @@ std::vector<T> quantised(const float* values, std::size_t count) {
 
 }  // namespace
 
-GrayImage read_gray_image(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(path, "", "file does not exist");
-  if (fs::is_directory(path, ec)) throw InputError(path, "", "is a folder, expected an image file");
-  check_png_is_complete(path);
-
-  OIIO::ImageSpec config;
-  // PNG and TIFF store colour unassociated with alpha; OIIO would multiply it by
-  // alpha on reading, but alpha is ignored here, so keep the colour as stored.
-  config.attribute("oiio:UnassociatedAlpha", 1);
-  const auto in = OIIO::ImageInput::open(path, &config);
-  if (!in) fail(path, OIIO::geterror(), "not an image file OpenImageIO can read");
-  in->geterror();  // errors OIIO noted but opened anyway are not fatal; those of reading the pixels are
+StoredImage read_stored_image(const std::string& path) {
+  const QuietStderr quiet;
+  const auto in = open_checked(path);
   const OIIO::ImageSpec& spec = in->spec();
-  if (spec.deep) throw InputError(path, "", "deep images are not supported");
-  if (spec.depth != 1) throw InputError(path, "", "volume images (depth > 1) are not supported");
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
-    throw InputError(path, "", "the image is empty");
-
-  GrayImage image;
+  StoredImage image;
   image.width = spec.width;
   image.height = spec.height;
-  const int channels = spec.nchannels >= 3 ? 3 : 1;  // RGB(A...) -> luma; gray(+alpha) -> gray
+  image.channels = spec.nchannels >= 3 ? 3 : 1;  // RGB(A...) -> RGB; gray(+alpha) -> gray
   switch (spec.format.basetype) {
     case OIIO::TypeDesc::UINT8:
-      image.source_format = PixelFormat::uint8;
-      image.values = read_gray<std::uint8_t>(*in, path, channels, 255.0f);
+      image.format = PixelFormat::uint8;
+      image.uint8 = read_stored<std::uint8_t>(*in, path, image.channels);
       break;
     case OIIO::TypeDesc::UINT16:
-      image.source_format = PixelFormat::uint16;
-      image.values = read_gray<std::uint16_t>(*in, path, channels, 65535.0f);
+      image.format = PixelFormat::uint16;
+      image.uint16 = read_stored<std::uint16_t>(*in, path, image.channels);
       break;
     default:  // float, half, and the rarer integer types, which OIIO normalises
-      image.source_format = PixelFormat::float32;
-      image.values = read_gray<float>(*in, path, channels, 1.0f);
+      image.format = PixelFormat::float32;
+      image.float32 = read_stored<float>(*in, path, image.channels);
       break;
   }
   in->close();
   return image;
 }
 
+GrayImage read_gray_image(const std::string& path) {
+  StoredImage stored = read_stored_image(path);
+  GrayImage image;
+  image.width = stored.width;
+  image.height = stored.height;
+  image.source_format = stored.format;
+  switch (stored.format) {
+    case PixelFormat::uint8: image.values = gray_of(stored.uint8, stored.channels, 255.0f); break;
+    case PixelFormat::uint16: image.values = gray_of(stored.uint16, stored.channels, 65535.0f); break;
+    case PixelFormat::float32:
+      image.values = stored.channels == 1 ? std::move(stored.float32) : gray_of(stored.float32, stored.channels, 1.0f);
+      break;
+  }
+  return image;
+}
+
 std::optional<std::array<int, 2>> image_file_size(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return std::nullopt;
+  const QuietStderr quiet;  // libpng prints a damaged header's error
   const auto in = OIIO::ImageInput::open(path);
   if (!in) {
     OIIO::geterror();  // clear it

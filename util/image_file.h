@@ -5,6 +5,7 @@
 // (util/atomic_file.h). Bad files and unwritable outputs throw InputError
 // naming the file; see docs/formats.md, "Images".
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,7 +22,34 @@ struct GrayImage {  // single channel, row-major
   PixelFormat source_format = PixelFormat::float32;  // what the file held (half -> float32)
 };
 
-// Any format OIIO reads; the first page of a multi-page file. RGB(A) becomes
+// Limits on every image read here (PIV frames, textures, photos for detection),
+// checked from the file's header before any pixel buffer is allocated: each side
+// at most kMaxImageSidePx, width x height at most kMaxImagePixels (also for the
+// tiles of a tiled file). A PNG must moreover hold enough compressed data for the
+// size its header states: deflate expands at most 1032-fold, so a PNG whose IDAT
+// bytes x 1032 are fewer than its rows need is refused unread. Over a limit:
+// InputError(path, "", message stating the limit).
+inline constexpr int kMaxImageSidePx = 65536;
+inline constexpr std::int64_t kMaxImagePixels = std::int64_t(1) << 30;  // 1073741824, e.g. 32768 x 32768
+
+// The first page of an image file as stored, reduced to grey or RGB only by
+// dropping channels: `channels` is 1 (gray, or gray + alpha: the gray channel)
+// or 3 (R, G, B of RGB(A...)), interleaved, row-major. uint8 and uint16 files
+// fill `uint8` resp. `uint16` with the stored levels; anything else (half,
+// float, the rarer integer types, which OIIO normalises) fills `float32`.
+// Bad, damaged or truncated files and files over the limits above throw
+// InputError naming the file; nothing is printed (decoder messages on stderr
+// are silenced, the error comes back as one line).
+struct StoredImage {
+  int width = 0, height = 0, channels = 0;
+  PixelFormat format = PixelFormat::float32;
+  std::vector<std::uint8_t> uint8;
+  std::vector<std::uint16_t> uint16;
+  std::vector<float> float32;
+};
+StoredImage read_stored_image(const std::string& path);
+
+// Any format OIIO reads, as read_stored_image; the first page of a multi-page file. RGB(A) becomes
 // Rec.601 luma 0.299 R + 0.587 G + 0.114 B (as OpenCV's cvtColor), gray+alpha
 // takes the gray channel; alpha is ignored.
 GrayImage read_gray_image(const std::string& path);

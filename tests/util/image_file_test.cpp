@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -53,6 +54,56 @@ std::string input_error_of(const std::string& path, Action&& action) {
   }
   ADD_FAILURE() << "expected an InputError for " << path;
   return "";
+}
+
+// Hand-made files: a PNG or a baseline TIFF whose header states any size, with
+// a few bytes of pixel data (what a damaged or hostile file looks like).
+std::uint32_t crc32_of(const std::string& bytes) {
+  std::uint32_t crc = 0xffffffffu;
+  for (unsigned char c : bytes) {
+    crc ^= c;
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  return ~crc;
+}
+std::string big_endian(std::uint32_t v) {
+  return {char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+}
+std::string png_chunk(const std::string& type, const std::string& data) {
+  return big_endian(std::uint32_t(data.size())) + type + data + big_endian(crc32_of(type + data));
+}
+// 8-bit gray; `idat`: the compressed stream (here: any few bytes).
+std::string png_claiming(std::uint32_t width, std::uint32_t height, const std::string& idat) {
+  const std::string ihdr = big_endian(width) + big_endian(height) + std::string{8, 0, 0, 0, 0};
+  return std::string("\x89PNG\r\n\x1a\n", 8) + png_chunk("IHDR", ihdr) + png_chunk("IDAT", idat) +
+         png_chunk("IEND", "");
+}
+std::string little_endian(std::uint32_t v, int bytes) {
+  std::string s;
+  for (int i = 0; i < bytes; ++i) s += char(v >> (8 * i));
+  return s;
+}
+// 8-bit gray, uncompressed, one strip (or, with tile sides, one tile) of 16 bytes.
+std::string tiff_claiming(std::uint32_t width, std::uint32_t height, std::uint32_t tile_width = 0,
+                          std::uint32_t tile_height = 0) {
+  const std::string data(16, '\0');
+  struct Entry { std::uint16_t tag, type; std::uint32_t value; };  // type 3: SHORT, 4: LONG
+  std::vector<Entry> entries = {{256, 4, width}, {257, 4, height}, {258, 3, 8}, {259, 3, 1}, {262, 3, 1}};
+  if (tile_width > 0) {
+    entries.insert(entries.end(), {{277, 3, 1}, {322, 4, tile_width}, {323, 4, tile_height}, {324, 4, 8},
+                                   {325, 4, std::uint32_t(data.size())}});
+  } else {
+    entries.insert(entries.end(), {{273, 4, 8}, {277, 3, 1}, {278, 4, height}, {279, 4, std::uint32_t(data.size())}});
+  }
+  std::string tiff = "II*" + std::string(1, '\0') + little_endian(8 + std::uint32_t(data.size()), 4) + data;
+  tiff += little_endian(std::uint32_t(entries.size()), 2);
+  for (const Entry& e : entries)
+    tiff += little_endian(e.tag, 2) + little_endian(e.type, 2) + little_endian(1, 4) +
+            (e.type == 3 ? little_endian(e.value, 2) + std::string(2, '\0') : little_endian(e.value, 4));
+  return tiff + little_endian(0, 4);
+}
+void write_bytes(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary) << bytes;
 }
 
 class ImageFileTest : public ::testing::Test {
@@ -251,6 +302,86 @@ TEST_F(ImageFileTest, BadInputFilesThrowInputErrorAndPrintNothing) {
   // libpng, left to itself, prints "libpng error: ..." for the truncated PNG.
   EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
   EXPECT_EQ(::testing::internal::GetCapturedStdout(), "");
+}
+
+// The files: a 74-byte PNG and a 234-byte TIFF whose headers claim
+// 100000 x 100000 px made the reader allocate ~10 GB. The limits are checked
+// from the header, before any pixel buffer, and the message states them.
+TEST_F(ImageFileTest, HeadersOverTheSizeLimitsAreRefusedBeforeAllocating) {
+  const std::string tiny_idat("\x78\x9c\x63\x00\x00\x00\x01\x00\x01", 9);  // zlib of one zero byte
+  write_bytes(path("huge.png"), png_claiming(100000, 100000, tiny_idat));
+  write_bytes(path("wide.png"), png_claiming(70000, 1, tiny_idat));  // one side over, few pixels
+  write_bytes(path("huge.tif"), tiff_claiming(100000, 100000));
+  write_bytes(path("tall.tif"), tiff_claiming(1, 65537));
+  write_bytes(path("huge_tiles.tif"), tiff_claiming(16, 16, 65536, 65536));
+  ::testing::internal::CaptureStderr();
+  for (const std::string name : {"huge.png", "wide.png", "huge.tif", "tall.tif", "huge_tiles.tif"}) {
+    SCOPED_TRACE(name);
+    const std::string message = input_error_of(path(name), [&] { read_gray_image(path(name)); });
+    EXPECT_NE(message.find("over the limit of 65536 px a side and 1073741824 px in all"), std::string::npos)
+        << message;
+    input_error_of(path(name), [&] { read_stored_image(path(name)); });
+  }
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+  // At the limit itself the size check passes (the file then fails for its data).
+  write_bytes(path("edge.png"), png_claiming(65536, 1, tiny_idat));
+  const std::string edge = input_error_of(path("edge.png"), [&] { read_gray_image(path("edge.png")); });
+  EXPECT_EQ(edge.find("over the limit"), std::string::npos) << edge;
+  EXPECT_NE(edge.find("1032-fold"), std::string::npos) << edge;
+}
+
+// Within the limits, a PNG header stating more pixels than its compressed data
+// can expand to (deflate: at most 1032-fold) is refused unread too.
+TEST_F(ImageFileTest, PngWithTooLittleDataForItsHeaderIsRefusedUnread) {
+  write_bytes(path("hollow.png"), png_claiming(30000, 30000, std::string("\x78\x9c\x63\x00\x00\x00\x01\x00\x01", 9)));
+  const std::string message = input_error_of(path("hollow.png"), [&] { read_gray_image(path("hollow.png")); });
+  EXPECT_NE(message.find("1032-fold"), std::string::npos) << message;
+  EXPECT_NE(message.find("30000 x 30000 px"), std::string::npos) << message;
+  // A real PNG passes that check, however well it compresses (all zero).
+  const std::vector<float> black(1000 * 600, 0.0f);
+  write_gray_image(path("black.png"), black.data(), 1000, 600, PixelFormat::uint16);
+  EXPECT_EQ(read_gray_image(path("black.png")).values, black);
+}
+
+// Damage libpng, libjpeg or libtiff detect must come back as the one-line
+// InputError and nothing on stderr ("libpng error: ..." used to be printed).
+TEST_F(ImageFileTest, DamagedFilesAreRefusedSilently) {
+  std::vector<float> frame(64 * 64);
+  for (std::size_t i = 0; i < frame.size(); ++i) frame[i] = float((i * 37) % 251) / 255.0f;
+  write_gray_image(path("good.png"), frame.data(), 64, 64, PixelFormat::uint8);
+  std::string png = read_file(path("good.png"));
+  std::string damaged = png;
+  const std::size_t idat = png.find("IDAT");
+  ASSERT_NE(idat, std::string::npos);
+  for (std::size_t i = idat + 10; i < idat + 40; ++i) damaged[i] = char(damaged[i] ^ 0x5a);  // the pixel data
+  write_bytes(path("damaged.png"), damaged);
+  std::string ihdr_damaged = png;
+  ihdr_damaged[20] = char(ihdr_damaged[20] ^ 1);  // the IHDR CRC no longer matches: libpng fails at open
+  write_bytes(path("ihdr.png"), ihdr_damaged);
+  // Valid chunks and CRCs, too little pixel data (libpng: "Not enough image data").
+  write_bytes(path("short.png"), png_claiming(64, 64, std::string("\x78\x9c\x63\x00\x00\x00\x01\x00\x01", 9)));
+  // A truncated JPEG: libjpeg warns "Premature end of JPEG file" and fills grey.
+  {
+    const auto out = OIIO::ImageOutput::create(path("whole.jpg"));
+    ASSERT_TRUE(out);
+    std::vector<std::uint8_t> levels(frame.size());
+    for (std::size_t i = 0; i < frame.size(); ++i) levels[i] = std::uint8_t(frame[i] * 255.0f);
+    ASSERT_TRUE(out->open(path("whole.jpg"), OIIO::ImageSpec(64, 64, 1, OIIO::TypeDesc::UINT8)));
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, levels.data()));
+    ASSERT_TRUE(out->close());
+  }
+  const std::string jpeg = read_file(path("whole.jpg"));
+  write_bytes(path("cut.jpg"), jpeg.substr(0, jpeg.size() / 2));
+  EXPECT_EQ(read_gray_image(path("whole.jpg")).width, 64);  // the whole one reads
+
+  ::testing::internal::CaptureStderr();
+  for (const std::string name : {"damaged.png", "ihdr.png", "short.png", "cut.jpg"}) {
+    SCOPED_TRACE(name);
+    input_error_of(path(name), [&] { read_gray_image(path(name)); });
+  }
+  EXPECT_FALSE(image_file_size(path("ihdr.png")));
+  std::fputs("stderr is back\n", stderr);  // the reads give stderr back
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "stderr is back\n");
 }
 
 TEST_F(ImageFileTest, FailedWritesLeaveTheTargetUntouchedAndNoTemporary) {
