@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 #include <Eigen/LU>
 
@@ -54,11 +55,57 @@ const char* to_string(UnprojectStatus status) {
   return "unknown";
 }
 
+namespace {
+
+// A number as a short text without fmt (this library does not link it).
+std::string number_text(double value) {
+  std::ostringstream out;
+  out.imbue(std::locale::classic());
+  out.precision(17);
+  out << value;
+  return out.str();
+}
+
+const std::string& image_limit_text() {
+  static const std::string text = "glasspiv takes images of at most " + std::to_string(kMaxImageSidePx) +
+                                  " px a side and " + std::to_string(kMaxImagePixels) + " px (2^30) in all";
+  return text;
+}
+
+// The problem with one side, or "" when it is fine.
+std::string side_problem(double value) {
+  if (!(value == std::floor(value)) || !std::isfinite(value))
+    return "must be a whole number of pixels, got " + number_text(value);
+  if (value <= 0) return "must be a positive number of pixels, got " + number_text(value);
+  if (value > kMaxImageSidePx) return number_text(value) + " px is too large: " + image_limit_text();
+  return "";
+}
+
+}  // namespace
+
+int checked_image_side_px(double value, const std::string& field) {
+  const std::string problem = side_problem(value);
+  if (!problem.empty()) throw InputError("", field, problem);
+  return static_cast<int>(value);
+}
+
+void check_image_size(double width_px, double height_px, const std::string& field) {
+  if (const std::string problem = side_problem(width_px); !problem.empty())
+    throw InputError("", field, "width " + problem);
+  if (const std::string problem = side_problem(height_px); !problem.empty())
+    throw InputError("", field, "height " + problem);
+  if (width_px * height_px > static_cast<double>(kMaxImagePixels))
+    throw InputError("", field,
+                     number_text(width_px) + " x " + number_text(height_px) + " = " +
+                         number_text(width_px * height_px) + " px is too large: " + image_limit_text());
+}
+
 CameraModel::CameraModel(int width_px, int height_px, double fx_px, double fy_px, double cx_px, double cy_px,
                          std::vector<double> distortion)
     : width_px_(width_px), height_px_(height_px), lens_model_(lens_model_for_count(distortion.size())) {
-  if (width_px <= 0) throw InputError("", "image width", "must be a positive number of pixels");
-  if (height_px <= 0) throw InputError("", "image height", "must be a positive number of pixels");
+  checked_image_side_px(width_px, "image width");
+  checked_image_side_px(height_px, "image height");
+  check_image_size(width_px, height_px, "image size");
   if (!(std::isfinite(fx_px) && fx_px > 0)) throw InputError("", "fx", "must be positive and finite");
   if (!(std::isfinite(fy_px) && fy_px > 0)) throw InputError("", "fy", "must be positive and finite");
   if (!std::isfinite(cx_px)) throw InputError("", "cx", "must be finite");

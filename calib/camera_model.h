@@ -4,6 +4,7 @@
 // y down, z forward; pixel (0, 0) is the centre of the top-left pixel, as in
 // OpenCV and mrcal.
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include <Eigen/Core>
 
 #include "calib/distortion.h"
+#include "util/image_file.h"
 
 namespace glasspiv {
 
@@ -22,6 +24,19 @@ std::string lens_model_name(LensModel model);
 LensModel lens_model_from_name(const std::string& name);
 // The model for a coefficient count; throws InputError naming `field` otherwise.
 LensModel lens_model_for_count(std::size_t count, const std::string& field = "distortion_coefficients");
+
+// The largest image glasspiv takes is the image files' (util/image_file.h):
+// each side at most kMaxImageSidePx pixels and width x height at most
+// kMaxImagePixels (2^30). CameraModel and every camera and observation reader
+// enforce it, before anything is allocated.
+
+// One side of an image as read from a file: throws InputError (no file, field
+// `field`) unless `value` is a whole number in [1, kMaxImageSidePx]. Takes a
+// double so that readers check a value before narrowing it to int.
+int checked_image_side_px(double value, const std::string& field);
+// Both sides (as above, the problem naming "width" or "height") and the pixel
+// count against kMaxImagePixels; InputError (no file, field `field`) otherwise.
+void check_image_size(double width_px, double height_px, const std::string& field);
 
 enum class UnprojectStatus {
   Ok,
@@ -45,8 +60,9 @@ struct UnprojectResult {
 class CameraModel {
  public:
   // Throws InputError (field named, no file) if a value is unusable: sizes not
-  // positive, focal lengths not positive, anything non-finite, or a distortion
-  // vector whose length is not 0, 4, 5, 8, 12 or 14.
+  // positive or past kMaxImageSidePx / kMaxImagePixels, focal lengths not
+  // positive, anything non-finite, or a distortion vector whose length is not
+  // 0, 4, 5, 8, 12 or 14.
   CameraModel(int width_px, int height_px, double fx_px, double fy_px, double cx_px, double cy_px,
               std::vector<double> distortion = {});
 

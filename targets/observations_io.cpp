@@ -7,11 +7,15 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include "calib/camera_model.h"
 #include "util/atomic_file.h"
 #include "util/input_error.h"
 #include "util/text_number.h"
@@ -33,10 +37,19 @@ bool known(const char* const* begin, const char* const* end, const std::string& 
 }
 
 // Semantic checks shared by both formats and by the writers.
+// The image size as read (before narrowing to int): the camera models' limits
+// (calib/camera_model.h: kMaxImageSidePx a side, kMaxImagePixels in all).
+std::pair<int, int> image_size(double width, double height, const std::string& path, const std::string& where = "") {
+  try {
+    check_image_size(width, height, "image_size_px");
+  } catch (const InputError& e) {
+    throw InputError(path, e.field(), where + e.problem());
+  }
+  return {static_cast<int>(width), static_cast<int>(height)};
+}
+
 void check(const Observations& o, const std::string& path) {
-  if (o.image_width_px <= 0 || o.image_height_px <= 0)
-    throw InputError(path, "image_size_px",
-                     fmt::format("must be positive, got [{}, {}]", o.image_width_px, o.image_height_px));
+  image_size(o.image_width_px, o.image_height_px, path);
   for (std::size_t v = 0; v < o.views.size(); ++v) {
     std::set<int> ids;
     for (std::size_t c = 0; c < o.views[v].corners.size(); ++c) {
@@ -96,8 +109,9 @@ Observations parse_yaml(std::string_view contents, const std::string& path) {
   Observations o;
   const YAML::Node size = top["image_size_px"];
   if (!size.IsSequence() || size.size() != 2) r.fail("image_size_px", size, "must be [width, height]");
-  o.image_width_px = r.whole(size[0], "image_size_px[0]");
-  o.image_height_px = r.whole(size[1], "image_size_px[1]");
+  std::tie(o.image_width_px, o.image_height_px) =
+      image_size(r.real(size[0], "image_size_px[0]"), r.real(size[1], "image_size_px[1]"), path,
+                 fmt::format("line {}: ", size.Mark().line + 1));
   o.target_name = r.text(top["target"], "target");
   const YAML::Node views = top["views"];
   if (!views.IsSequence()) r.fail("views", views, "must be a list of views");
@@ -155,14 +169,107 @@ std::string format_yaml(const Observations& o) {
 
 // ---------------------------------------------------------------- JSON
 
+constexpr int kMaxJsonDepth = 64;
+
+// Builds the document like json::parse, but refuses a key given twice in an
+// object (json::parse keeps the last), a number beyond a double's range
+// ("1e999") and nesting deeper than kMaxJsonDepth, each as an InputError
+// naming the file and the field.
+class JsonBuilder : public nlohmann::json_sax<nlohmann::json> {
+ public:
+  using json = nlohmann::json;
+  JsonBuilder(const std::string& path, json& root) : path_(path), root_(root) {}
+
+  bool null() override { return add(nullptr); }
+  bool boolean(bool v) override { return add(v); }
+  bool number_integer(number_integer_t v) override { return add(v); }
+  bool number_unsigned(number_unsigned_t v) override { return add(v); }
+  bool number_float(number_float_t v, const string_t&) override { return add(v); }
+  bool string(string_t& v) override { return add(v); }
+  bool binary(binary_t& v) override { return add(json::binary(v)); }
+  bool start_object(std::size_t) override { return open(json::object()); }
+  bool start_array(std::size_t) override { return open(json::array()); }
+  bool end_object() override { return close(); }
+  bool end_array() override { return close(); }
+  bool key(string_t& k) override {
+    if (open_.back().value->contains(k)) throw InputError(path_, child_field(k), "appears twice in the object");
+    key_ = k;
+    return true;
+  }
+  bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception& e) override {
+    std::string what = e.what();
+    // "[json.exception.out_of_range.406] number overflow parsing '1e999'"
+    if (const std::size_t bracket = what.find("] "); what.rfind("[json.exception.", 0) == 0 && bracket != std::string::npos)
+      what = what.substr(bracket + 2);
+    if (e.id == 406)
+      throw InputError(path_, pending_field(),
+                       fmt::format("at byte {}: {} (a number must lie within a double's range, about 1.8e308)",
+                                   position, what));
+    throw InputError(path_, pending_field(), fmt::format("malformed JSON at byte {}: {}", position, what));
+  }
+
+ private:
+  struct Open {
+    json* value;
+    std::string field;
+  };
+  std::string child_field(const std::string& key) const {
+    const std::string& parent = open_.back().field;
+    return parent.empty() ? key : parent + "." + key;
+  }
+  // The field of the value that comes next.
+  std::string pending_field() const {
+    if (open_.empty()) return "";
+    const json& parent = *open_.back().value;
+    if (parent.is_array()) return fmt::format("{}[{}]", open_.back().field, parent.size());
+    return key_.empty() ? open_.back().field : child_field(key_);
+  }
+  // Places `v` where the next value goes; returns where it went.
+  json* place(json&& v, std::string* field) {
+    *field = pending_field();
+    if (open_.empty()) {
+      root_ = std::move(v);
+      return &root_;
+    }
+    json& parent = *open_.back().value;
+    if (parent.is_array()) {
+      parent.push_back(std::move(v));
+      return &parent.back();
+    }
+    json& slot = parent[key_];
+    slot = std::move(v);
+    key_.clear();
+    return &slot;
+  }
+  bool add(json&& v) {
+    std::string field;
+    place(std::move(v), &field);
+    return true;
+  }
+  bool open(json&& v) {
+    std::string field;
+    json* at = place(std::move(v), &field);
+    if (open_.size() >= static_cast<std::size_t>(kMaxJsonDepth))
+      throw InputError(path_, field, fmt::format("nested more than {} levels deep", kMaxJsonDepth));
+    open_.push_back({at, field});
+    return true;
+  }
+  bool close() {
+    open_.pop_back();
+    return true;
+  }
+
+  const std::string& path_;
+  json& root_;
+  std::vector<Open> open_;
+  std::string key_;
+};
+
 Observations parse_json(std::string_view contents, const std::string& path) {
   using nlohmann::json;
   json root;
-  try {
-    root = json::parse(contents);
-  } catch (const json::parse_error& e) {
-    throw InputError(path, "", fmt::format("malformed JSON at byte {}: {}", e.byte, e.what()));
-  }
+  JsonBuilder builder(path, root);
+  json::sax_parse(contents, &builder);
   auto fail = [&](const std::string& field, const std::string& problem) -> void {
     throw InputError(path, field, problem);
   };
@@ -195,8 +302,8 @@ Observations parse_json(std::string_view contents, const std::string& path) {
   Observations o;
   const json& size = root["image_size_px"];
   if (!size.is_array() || size.size() != 2) fail("image_size_px", "must be [width, height]");
-  o.image_width_px = whole(size[0], "image_size_px[0]");
-  o.image_height_px = whole(size[1], "image_size_px[1]");
+  std::tie(o.image_width_px, o.image_height_px) =
+      image_size(real(size[0], "image_size_px[0]"), real(size[1], "image_size_px[1]"), path);
   o.target_name = text(root["target"], "target");
   const json& views = root["views"];
   if (!views.is_array()) fail("views", "must be a list of views");

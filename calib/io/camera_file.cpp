@@ -40,11 +40,28 @@ int line_of_offset(std::string_view text, std::size_t offset) {
   return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(offset), '\n'));
 }
 
+std::string pixel_pitch_problem(double pitch_um) {
+  if (!std::isfinite(pitch_um)) return "must be finite";
+  if (!(pitch_um > 0)) return "must be positive (micrometres)";
+  if (pitch_um > kMaxPixelPitchUm) return fmt::format("must be at most {} um (1 mm)", kMaxPixelPitchUm);
+  return "";
+}
+
+std::pair<int, int> checked_image_size(double width_px, double height_px, const std::string& path,
+                                       const std::string& field, const std::string& where) {
+  try {
+    check_image_size(width_px, height_px, field);
+  } catch (const InputError& e) {
+    throw InputError(path, e.field(), where + e.problem());
+  }
+  return {static_cast<int>(width_px), static_cast<int>(height_px)};
+}
+
 void check_writable(const Camera& camera, const std::string& path) {
-  if (camera.pixel_pitch_um && !(std::isfinite(*camera.pixel_pitch_um) && *camera.pixel_pitch_um > 0))
+  if (camera.pixel_pitch_um && !pixel_pitch_problem(*camera.pixel_pitch_um).empty())
     throw InputError(path, "pixel_pitch_um",
-                     fmt::format("camera '{}' has pixel pitch {}; it must be positive and finite", camera.name,
-                                 *camera.pixel_pitch_um));
+                     fmt::format("camera '{}' has pixel pitch {}; it {}", camera.name, *camera.pixel_pitch_um,
+                                 pixel_pitch_problem(*camera.pixel_pitch_um)));
   if (camera.camera_from_world &&
       !(camera.camera_from_world->rotation.allFinite() && camera.camera_from_world->translation_mm.allFinite()))
     throw InputError(path, "camera_from_world", fmt::format("camera '{}' has a pose that is not finite", camera.name));

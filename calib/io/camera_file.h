@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "calib/camera.h"
@@ -17,6 +18,14 @@
 namespace glasspiv {
 
 enum class CameraFileFormat { Glasspiv, OpenCV, Mrcal, Davis };
+
+// Limits every camera reader enforces (besides the image size limits of
+// calib/camera_model.h, kMaxImageSidePx and kMaxImagePixels):
+//   the largest pixel pitch a file may give, in micrometres (1 mm);
+constexpr double kMaxPixelPitchUm = 1000;
+//   the deepest nesting of lists and mappings in an OpenCV FileStorage file,
+//   checked on the text before OpenCV's recursive parser sees it.
+constexpr int kMaxOpenCVNestingDepth = 64;
 
 std::string format_name(CameraFileFormat format);
 // "glasspiv", "opencv", "mrcal", "davis"; throws InputError(field "format") otherwise.
@@ -56,6 +65,16 @@ int line_of_offset(std::string_view text, std::size_t offset);
 // Throws InputError naming `path` unless the camera's pose and pixel pitch are
 // finite (and the pitch positive): writers call it before writing.
 void check_writable(const Camera& camera, const std::string& path);
+// "" for a usable pixel pitch (positive, finite, at most kMaxPixelPitchUm), else
+// what is wrong with it ("must be ..."): readers put it into their InputError.
+std::string pixel_pitch_problem(double pitch_um);
+// The image size check of calib/camera_model.h for a reader: `width_px` and
+// `height_px` as read (before narrowing to int); throws InputError naming `path`
+// and `field` (its problem after `where`, e.g. "line 3: ") unless both are whole
+// numbers in [1, kMaxImageSidePx] with width x height <= kMaxImagePixels.
+// Returns {width, height}.
+std::pair<int, int> checked_image_size(double width_px, double height_px, const std::string& path,
+                                       const std::string& field, const std::string& where = "");
 }  // namespace camera_file_detail
 
 }  // namespace glasspiv

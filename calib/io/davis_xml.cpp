@@ -73,11 +73,18 @@ class MapperReader {
     throw InputError(path_, label_ + (field.empty() ? "" : "/" + field), where + problem);
   }
 
-  // The first element called `name` anywhere below `parent`.
+  // The one element called `name` anywhere below `parent` (given twice, the
+  // file would be ambiguous: refused).
   pugi::xml_node find(const pugi::xml_node& parent, const char* name, bool required = true) const {
-    const pugi::xml_node node = parent.select_node((std::string(".//") + name).c_str()).node();
-    if (!node && required) fail(parent, name, "missing (no <" + std::string(name) + "> element in the mapper)");
-    return node;
+    const pugi::xpath_node_set nodes = parent.select_nodes((std::string(".//") + name).c_str());
+    if (nodes.empty()) {
+      if (required) fail(parent, name, "missing (no <" + std::string(name) + "> element in the mapper)");
+      return {};
+    }
+    if (nodes.size() > 1)
+      fail(nodes[1].node(), name,
+           fmt::format("<{}> appears twice in <{}> (it must be given once)", name, parent.name()));
+    return nodes[0].node();
   }
 
   std::string text(const pugi::xml_node& node, const char* attribute) const {
@@ -100,12 +107,20 @@ class MapperReader {
     return *v;
   }
 
-  int positive_int(const pugi::xml_node& node, const char* attribute) const {
+  int image_side(const pugi::xml_node& node, const char* attribute) const {
     const double v = real(node, attribute);
-    if (!(v == std::floor(v) && v > 0 && v <= 1e9))
-      fail(node, field(node, attribute), "must be a positive whole number of pixels, is " + text(node, attribute));
-    return static_cast<int>(v);
+    try {
+      return checked_image_side_px(v, field(node, attribute));
+    } catch (const InputError& e) {
+      fail(node, field(node, attribute), e.problem());
+    }
   }
+
+  // The line of `node`, for the shared checks' messages.
+  std::string where(const pugi::xml_node& node) const {
+    return fmt::format("line {}: ", line_of_offset(contents_, static_cast<std::size_t>(node.offset_debug())));
+  }
+  const std::string& label() const { return label_; }
 
   static std::string field(const pugi::xml_node& node, const char* attribute) {
     return std::string(node.name()) + "." + attribute;
@@ -155,14 +170,18 @@ Camera read_mapper(std::string_view contents, const std::string& path, const pug
   const std::string name = name_attribute ? name_attribute.value() : "camera" + id;
 
   const pugi::xml_node size = r.find(mapper, "OriginalImageSize");
-  const int width = r.positive_int(size, "Width");
-  const int height = r.positive_int(size, "Height");
+  const int width = r.image_side(size, "Width");
+  const int height = r.image_side(size, "Height");
+  camera_file_detail::checked_image_size(width, height, path, r.label() + "/OriginalImageSize", r.where(size));
 
   const pugi::xml_node internal = r.find(mapper, "InternalCameraParameters");
   const pugi::xml_node pixel = r.find(internal, "SensorPixelSizeMm");
   const long double pitch_mm = r.precise(pixel, "Value");
   if (!(pitch_mm > 0)) r.fail(pixel, "SensorPixelSizeMm.Value", "must be a positive pixel size in mm");
   const double pitch_um = pixel_pitch_um_from_mm(pitch_mm);
+  if (const std::string problem = camera_file_detail::pixel_pitch_problem(pitch_um); !problem.empty())
+    r.fail(pixel, "SensorPixelSizeMm.Value",
+           fmt::format("is {} mm, a pixel pitch of {} um; it {}", r.text(pixel, "Value"), pitch_um, problem));
 
   const pugi::xml_node focal = r.find(internal, "FocalLengthPixel");
   const long double focal_x_mm = r.precise(focal, "x");
@@ -202,6 +221,29 @@ void set(pugi::xml_node node, const char* attribute, const std::string& value) {
   node.append_attribute(attribute).set_value(value.c_str());
 }
 
+// pugixml keeps every copy of an attribute given twice (and reads the first):
+// refuse them, on every element. Iterative, so deep files cannot overflow the stack.
+void check_unique_attributes(const pugi::xml_document& doc, std::string_view contents, const std::string& path) {
+  struct Walker : pugi::xml_tree_walker {
+    std::string_view contents;
+    const std::string* path = nullptr;
+    bool for_each(pugi::xml_node& node) override {
+      if (node.type() != pugi::node_element) return true;
+      std::set<std::string> names;
+      for (const pugi::xml_attribute& a : node.attributes())
+        if (!names.insert(a.name()).second)
+          throw InputError(*path, std::string(node.name()) + "." + a.name(),
+                           fmt::format("line {}: attribute '{}' appears twice in <{}>",
+                                       line_of_offset(contents, static_cast<std::size_t>(node.offset_debug())),
+                                       a.name(), node.name()));
+      return true;
+    }
+  } walker;
+  walker.contents = contents;
+  walker.path = &path;
+  const_cast<pugi::xml_document&>(doc).traverse(walker);
+}
+
 // Calls `each(mapper, identifier)` for every CoordinateMapper of a DaVis file.
 void for_each_mapper(std::string_view contents, const std::string& path,
                      const std::function<void(const pugi::xml_node&, const std::string&)>& each) {
@@ -212,6 +254,7 @@ void for_each_mapper(std::string_view contents, const std::string& path,
                      fmt::format("malformed XML, line {}: {}",
                                  line_of_offset(contents, static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, result.offset))),
                                  result.description()));
+  check_unique_attributes(doc, contents, path);
   const pugi::xml_node root = doc.document_element();
   if (std::string(root.name()) != "Calibration")
     throw InputError(path, "",

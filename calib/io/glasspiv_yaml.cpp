@@ -34,11 +34,13 @@ class Reader : public YamlFields {
  public:
   using YamlFields::YamlFields;
 
-  int positive_int(const YAML::Node& node, const std::string& field) const {
+  int image_side(const YAML::Node& node, const std::string& field) const {
     const double value = real(node, field);
-    if (!(value == std::floor(value) && value > 0 && value <= 1e9))
-      fail(field, node, "must be a positive whole number of pixels, got " + node.Scalar());
-    return static_cast<int>(value);
+    try {
+      return checked_image_side_px(value, field);
+    } catch (const InputError& e) {
+      fail(field, node, e.problem());
+    }
   }
 };
 
@@ -77,8 +79,10 @@ std::vector<Camera> parse(std::string_view contents, const std::string& path) {
   const YAML::Node size_node = required("image_size_px");
   if (!size_node.IsSequence() || size_node.size() != 2)
     r.fail("image_size_px", size_node, "must be [width, height] in pixels");
-  const int width = r.positive_int(size_node[0], "image_size_px[0]");
-  const int height = r.positive_int(size_node[1], "image_size_px[1]");
+  const int width = r.image_side(size_node[0], "image_size_px[0]");
+  const int height = r.image_side(size_node[1], "image_size_px[1]");
+  camera_file_detail::checked_image_size(width, height, path, "image_size_px",
+                                         fmt::format("line {}: ", size_node.Mark().line + 1));
 
   const YAML::Node model_node = required("lens_model");
   const std::string model_name = r.text(model_node, "lens_model");
@@ -103,7 +107,8 @@ std::vector<Camera> parse(std::string_view contents, const std::string& path) {
   std::optional<double> pitch_um;
   if (field("pixel_pitch_um")) {
     pitch_um = r.real(*field("pixel_pitch_um"), "pixel_pitch_um");
-    if (!(*pitch_um > 0)) r.fail("pixel_pitch_um", *field("pixel_pitch_um"), "must be positive (micrometres)");
+    if (const std::string problem = camera_file_detail::pixel_pitch_problem(*pitch_um); !problem.empty())
+      r.fail("pixel_pitch_um", *field("pixel_pitch_um"), fmt::format("{}, got {}", problem, format_real(*pitch_um)));
   }
 
   std::optional<std::vector<double>> focal_px, focal_mm;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <set>
 
 #include <fmt/format.h>
 
@@ -104,12 +105,18 @@ class Parser {
     PyValue v;
     v.kind = PyValue::Kind::Dict;
     v.offset = pos_++;
+    std::set<std::string> keys;
     for (;;) {
       skip();
       if (peek() == '}') break;
       const PyValue key = value();
       if (key.kind != PyValue::Kind::String && key.kind != PyValue::Kind::Number)
         fail(key.offset, std::string("a dict key must be a string, not ") + kind_name(key.kind));
+      // Python keeps the last of a key given twice; mrcal never writes one.
+      if (!keys.insert(key.text).second)
+        throw InputError(path_, key.text,
+                         fmt::format("line {}: the key '{}' appears twice in the dict", line_of_offset(s_, key.offset),
+                                     key.text));
       skip();
       if (peek() != ':') fail(pos_, "expected ':' after the key '" + key.text + "'");
       ++pos_;
@@ -329,12 +336,16 @@ class Interpreter {
       fail("imagersize", *imagersize, "must be [width, height] in pixels");
     int size[2];
     for (int i = 0; i < 2; ++i) {
-      const double v = number(imagersize->items[i], fmt::format("imagersize[{}]", i));
-      if (!(v == std::floor(v) && v > 0 && v <= 1e9))
-        fail(fmt::format("imagersize[{}]", i), imagersize->items[i],
-             "must be a positive whole number of pixels, is " + imagersize->items[i].text);
-      size[i] = static_cast<int>(v);
+      const std::string field = fmt::format("imagersize[{}]", i);
+      const double v = number(imagersize->items[i], field);
+      try {
+        size[i] = checked_image_side_px(v, field);
+      } catch (const InputError& e) {
+        fail(field, imagersize->items[i], e.problem());
+      }
     }
+    camera_file_detail::checked_image_size(size[0], size[1], path_, "imagersize",
+                                           fmt::format("line {}: ", line_of_offset(text_, imagersize->offset)));
 
     std::optional<RigidTransform> pose;
     if (extrinsics) {

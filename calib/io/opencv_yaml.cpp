@@ -1,7 +1,13 @@
 #include "calib/io/opencv_yaml.h"
 
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <set>
 
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
@@ -26,6 +32,98 @@ std::string describe(const cv::Exception& e, int added_lines) {
       return fmt::format("malformed OpenCV FileStorage YAML, line {}: {}", line - added_lines, func.substr(close + 3));
   }
   return "OpenCV FileStorage cannot read it: " + e.err;
+}
+
+// OpenCV's FileStorage parser recurses once per level of nesting, so a file
+// nested deep enough overflows the stack (SIGSEGV): measure the depth on the text
+// first. The measure never undercounts: every indentation step, "- " entry and
+// '[' / '{' adds a level (also in comments and strings, which only overcounts),
+// and a ']' / '}' ends one only outside comments and quotes.
+void check_nesting_depth(std::string_view text, const std::string& path) {
+  std::vector<std::size_t> indents;  // columns of the open block levels
+  int flow = 0;
+  int line = 0;
+  auto check = [&](std::size_t depth) {
+    if (depth > static_cast<std::size_t>(kMaxOpenCVNestingDepth))
+      throw InputError(path, "",
+                       fmt::format("line {}: nested more than {} levels deep (lists and mappings); glasspiv reads "
+                                   "OpenCV FileStorage files nested at most {} levels",
+                                   line, kMaxOpenCVNestingDepth, kMaxOpenCVNestingDepth));
+  };
+  for (std::size_t at = 0; at < text.size();) {
+    ++line;
+    const std::size_t end = std::min(text.find('\n', at), text.size());
+    const std::string_view l = text.substr(at, end - at);
+    at = end + 1;
+    std::size_t column = l.find_first_not_of(" \t\r");
+    if (column == std::string_view::npos) continue;
+    // Block levels: the indentation, then the content after each "- ".
+    while (!indents.empty() && indents.back() > column) indents.pop_back();
+    for (;;) {
+      if (indents.empty() || indents.back() < column) indents.push_back(column);
+      if (l[column] != '-' || (column + 1 < l.size() && l[column + 1] != ' ' && l[column + 1] != '\t')) break;
+      const std::size_t next = l.find_first_not_of(" \t\r", column + 1);
+      if (next == std::string_view::npos) break;
+      column = next;
+    }
+    check(indents.size() + static_cast<std::size_t>(flow));
+    // Flow levels; from a quote or '#' on, the line may be text: count its
+    // openings but none of its closings.
+    bool maybe_text = false;
+    for (std::size_t i = column; i < l.size(); ++i) {
+      const char c = l[i];
+      if (c == '[' || c == '{') {
+        ++flow;
+        check(indents.size() + static_cast<std::size_t>(flow));
+      } else if ((c == ']' || c == '}') && !maybe_text) {
+        flow = std::max(0, flow - 1);
+      } else if (c == '"' || c == '\'' || c == '#') {
+        maybe_text = true;
+      }
+    }
+  }
+}
+
+// FileStorage keeps both entries of a key given twice (and reads the first):
+// refuse them, in every mapping.
+void check_unique_keys(const cv::FileNode& node, const std::string& path, const std::string& field) {
+  if (!node.isMap() && !node.isSeq()) return;
+  std::set<std::string> keys;
+  int index = 0;
+  for (cv::FileNodeIterator it = node.begin(); it != node.end(); ++it, ++index) {
+    const cv::FileNode child = *it;
+    std::string name;
+    if (node.isMap()) {
+      name = child.name();
+      if (!keys.insert(name).second)
+        throw InputError(path, field.empty() ? name : field + "." + name,
+                         "appears twice (the key '" + name + "' is given more than once)");
+      name = field.empty() ? name : field + "." + name;
+    } else {
+      name = fmt::format("{}[{}]", field, index);
+    }
+    check_unique_keys(child, path, name);
+  }
+}
+
+// An OpenCV element type code ("d", "f", "u", ...): the range of values it
+// holds exactly, or nullopt for codes glasspiv does not read.
+struct ElementType {
+  char code;
+  double min, max;
+  bool whole;
+};
+std::optional<ElementType> element_type(char code) {
+  switch (code) {
+    case 'u': return ElementType{code, 0, 255, true};
+    case 'c': return ElementType{code, -128, 127, true};
+    case 'w': return ElementType{code, 0, 65535, true};
+    case 's': return ElementType{code, -32768, 32767, true};
+    case 'i': return ElementType{code, -2147483648.0, 2147483647.0, true};
+    case 'f': return ElementType{code, -std::numeric_limits<float>::max(), std::numeric_limits<float>::max(), false};
+    case 'd': return ElementType{code, -std::numeric_limits<double>::max(), std::numeric_limits<double>::max(), false};
+    default: return std::nullopt;
+  }
 }
 
 class Reader {
@@ -53,17 +151,15 @@ class Reader {
     return value;
   }
 
-  int positive_int(const cv::FileNode& node, const std::string& field) const {
+  int image_side(const cv::FileNode& node, const std::string& field) const {
     if (node.isNone()) fail(field, "missing (required: glasspiv needs the image size to build a camera model)");
-    if (node.isInt()) {
-      const int value = guarded(field, [&] { return static_cast<int>(node); });
-      if (value <= 0) fail(field, fmt::format("must be a positive number of pixels, got {}", value));
-      return value;
+    const double value =
+        node.isInt() ? static_cast<double>(guarded(field, [&] { return static_cast<int>(node); })) : real(node, field);
+    try {
+      return checked_image_side_px(value, field);
+    } catch (const InputError& e) {
+      fail(field, e.problem());
     }
-    const double value = real(node, field);
-    if (!(value == std::floor(value) && value > 0 && value <= 1e9))
-      fail(field, fmt::format("must be a positive whole number of pixels, got {}", format_real(value)));
-    return static_cast<int>(value);
   }
 
   // An !!opencv-matrix, or a plain list of numbers (read as one row).
@@ -76,18 +172,49 @@ class Reader {
     }
     if (!node.isMap() || node["rows"].isNone() || node["cols"].isNone() || node["data"].isNone())
       fail(field, "must be an !!opencv-matrix (rows, cols, dt, data) or a list of numbers");
-    guarded(field, [&] {
-      node >> m;
-      return 0;
-    });
-    if (m.empty()) return cv::Mat(0, 0, CV_64F);
-    if (m.channels() != 1) fail(field, fmt::format("must have one channel, has {}", m.channels()));
-    cv::Mat d;
-    m.convertTo(d, CV_64F);
-    for (int r = 0; r < d.rows; ++r)
-      for (int c = 0; c < d.cols; ++c)
-        if (!std::isfinite(d.at<double>(r, c)))
-          fail(field, fmt::format("element ({}, {}) must be finite, got {}", r, c, d.at<double>(r, c)));
+    // Read by hand rather than by OpenCV's `node >> m`, which converts every
+    // value to `dt` silently (dt: u turns 600 into 255).
+    auto count = [&](const char* key) {
+      const cv::FileNode n = node[key];
+      const std::string f = field + "." + key;
+      if (!n.isInt()) fail(f, "must be a whole number");
+      const int value = guarded(f, [&] { return static_cast<int>(n); });
+      if (value < 0) fail(f, fmt::format("must not be negative, is {}", value));
+      return value;
+    };
+    const int rows = count("rows"), cols = count("cols");
+    const cv::FileNode dt_node = node["dt"];
+    if (dt_node.isNone()) fail(field + ".dt", "missing (the element type, e.g. d for double)");
+    if (!dt_node.isString()) fail(field + ".dt", "must be an OpenCV element type such as d or f");
+    const std::string dt = dt_node.string();
+    std::size_t digits = 0;
+    while (digits < dt.size() && std::isdigit(static_cast<unsigned char>(dt[digits]))) ++digits;
+    if (digits > 0 && dt.substr(0, digits) != "1" && dt.size() == digits + 1 && element_type(dt.back()))
+      fail(field, fmt::format("must have one channel, dt '{}' has {}", dt, dt.substr(0, digits)));
+    const std::optional<ElementType> type =
+        dt.size() == digits + 1 ? element_type(dt.back()) : std::optional<ElementType>();
+    if (!type)
+      fail(field + ".dt",
+           fmt::format("element type '{}' is not one glasspiv reads (d, f, i, s, w, c or u, one channel)", dt));
+    const cv::FileNode data = node["data"];
+    if (!data.isSeq()) fail(field + ".data", "must be a list of numbers");
+    const std::int64_t expected = static_cast<std::int64_t>(rows) * cols;
+    if (static_cast<std::int64_t>(data.size()) != expected)
+      fail(field, fmt::format("rows x cols = {} x {} = {} elements, but data has {}", rows, cols, expected,
+                              data.size()));
+    if (expected == 0) return cv::Mat(0, 0, CV_64F);
+    cv::Mat d(rows, cols, CV_64F);
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c) {
+        const std::string f = fmt::format("{}.data[{}]", field, r * cols + c);
+        double v = real(data[r * cols + c], f);
+        if (v < type->min || v > type->max || (type->whole && v != std::floor(v)))
+          fail(f, fmt::format("element ({}, {}) = {} does not fit dt '{}' ({} {} to {})", r, c, format_number(v),
+                              type->code, type->whole ? "whole numbers" : "numbers", format_number(type->min),
+                              format_number(type->max)));
+        if (type->code == 'f') v = static_cast<float>(v);  // what a 32-bit matrix holds
+        d.at<double>(r, c) = v;
+      }
     return d;
   }
 
@@ -106,6 +233,7 @@ class Reader {
 };
 
 std::vector<Camera> parse(std::string_view contents, const std::string& path) {
+  check_nesting_depth(contents, path);
   std::string text(contents);
   if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);
   // In memory, FileStorage recognises YAML by its %YAML directive only.
@@ -125,6 +253,10 @@ std::vector<Camera> parse(std::string_view contents, const std::string& path) {
   const Reader r(path, added_lines);
   const cv::FileNode root = r.guarded("", [&] { return fs.root(); });
   if (!root.isMap()) r.fail("", "expected a mapping of OpenCV FileStorage fields (camera_matrix, ...)");
+  r.guarded("", [&] {
+    check_unique_keys(root, path, "");
+    return 0;
+  });
   auto node = [&](const char* key) { return r.guarded(key, [&] { return root[key]; }); };
 
   std::string name = camera_file_detail::default_camera_name(path);
@@ -133,8 +265,9 @@ std::vector<Camera> parse(std::string_view contents, const std::string& path) {
     name = n.string();
   }
 
-  const int width = r.positive_int(node("image_width"), "image_width");
-  const int height = r.positive_int(node("image_height"), "image_height");
+  const int width = r.image_side(node("image_width"), "image_width");
+  const int height = r.image_side(node("image_height"), "image_height");
+  camera_file_detail::checked_image_size(width, height, path, "image_width");
 
   const cv::FileNode k_node = node("camera_matrix");
   if (k_node.isNone()) r.fail("camera_matrix", "missing (required)");
@@ -162,7 +295,8 @@ std::vector<Camera> parse(std::string_view contents, const std::string& path) {
   std::optional<double> pitch_um;
   if (const cv::FileNode n = node("pixel_pitch_um"); !n.isNone()) {
     pitch_um = r.real(n, "pixel_pitch_um");
-    if (!(*pitch_um > 0)) r.fail("pixel_pitch_um", fmt::format("must be positive (micrometres), got {}", *pitch_um));
+    if (const std::string problem = camera_file_detail::pixel_pitch_problem(*pitch_um); !problem.empty())
+      r.fail("pixel_pitch_um", fmt::format("{}, got {}", problem, *pitch_um));
   }
 
   std::optional<RigidTransform> pose;

@@ -678,6 +678,16 @@ std::vector<BadInput> bad_inputs() {
       {"focal length in mm without pitch", F::Glasspiv,
        replace(g, "pixel_pitch_um: 6.5\n", "focal_length_mm: [50.0, 50.0]\n"), {"focal_length_mm", "pixel_pitch_um"}},
       {"not a mapping", F::Glasspiv, "- 1\n- 2\n", {"mapping"}},
+      {"image 1e8 x 1e8", F::Glasspiv, replace(g, "[2560, 2160]", "[1e8, 1e8]"),
+       {"image_size_px[0]", "line 3", "65536 px a side"}},
+      {"image too many pixels", F::Glasspiv, replace(g, "[2560, 2160]", "[65536, 65536]"),
+       {"image_size_px", "line 3", "1073741824 px"}},
+      {"width past the int range", F::Glasspiv, replace(g, "[2560, 2160]", "[2147483648, 2160]"),
+       {"image_size_px[0]", "65536 px a side"}},
+      {"infinite pixel pitch", F::Glasspiv, replace(g, "6.5", ".inf"), {"pixel_pitch_um", "finite"}},
+      {"absurd pixel pitch", F::Glasspiv, replace(g, "6.5", "1e308"), {"pixel_pitch_um", "at most 1000 um"}},
+      {"duplicate pose field", F::Glasspiv, replace(g, "tvec_mm: [0, 0, 600]", "tvec_mm: [0, 0, 600], rvec: [0, 0, 0]"),
+       {"camera_from_world.rvec", "twice"}},
       // OpenCV FileStorage YAML
       {"malformed OpenCV YAML", F::OpenCV, replace(o, "   rows: 3\n", "rows: 3\n"), {"line "}},
       {"missing image_width", F::OpenCV, replace(o, "image_width: 640\n", ""), {"field 'image_width'", "missing"}},
@@ -706,6 +716,46 @@ std::vector<BadInput> bad_inputs() {
       {"negative pixel pitch", F::OpenCV, o + "pixel_pitch_um: -6.5\n", {"pixel_pitch_um", "positive"}},
       {"rvec without tvec", F::OpenCV, o + "rvec: [0.1, 0.2, 0.3]\n", {"tvec", "missing"}},
       {"rvec of 2", F::OpenCV, o + "rvec: [0.1, 0.2]\ntvec: [1, 2, 3]\n", {"rvec", "3 elements"}},
+      {"image_width past the int range", F::OpenCV, replace(o, "640", "2147483647"),
+       {"image_width", "2147483647", "65536 px a side"}},
+      {"image_width past the side limit", F::OpenCV, replace(o, "640", "65537"), {"image_width", "65536 px a side"}},
+      {"image too many pixels", F::OpenCV, replace(replace(o, "640", "65536"), "480", "32768"),
+       {"image_width", "65536 x 32768", "1073741824 px"}},
+      {"negative image_height", F::OpenCV, replace(o, "480", "-480"), {"image_height", "positive"}},
+      {"dt u saturating the camera matrix", F::OpenCV, replace(o, "dt: d", "dt: u"),
+       {"camera_matrix.data[0]", "600", "does not fit dt 'u'", "0 to 255"}},
+      {"dt i with a fraction", F::OpenCV, replace(replace(o, "dt: d", "dt: i"), "320.", "320.5"),
+       {"camera_matrix.data[2]", "320.5", "dt 'i'", "whole numbers"}},
+      {"three channels", F::OpenCV, replace(o, "dt: d", "dt: \"3d\""), {"camera_matrix", "one channel", "3d"}},
+      {"unknown element type", F::OpenCV, replace(o, "dt: d", "dt: q"), {"camera_matrix.dt", "'q'"}},
+      {"missing dt", F::OpenCV, replace(o, "   dt: d\n", ""), {"camera_matrix.dt", "missing"}},
+      {"float overflow", F::OpenCV, replace(replace(o, "dt: d", "dt: f"), "320.", "1e39"),
+       {"camera_matrix.data[2]", "dt 'f'"}},
+      {"data count disagrees with rows x cols", F::OpenCV, replace(o, "   cols: 5", "   cols: 4"),
+       {"distortion_coefficients", "4 elements", "data has 5"}},
+      {"duplicate top-level key", F::OpenCV, o + "image_width: 1280\n", {"field 'image_width'", "twice"}},
+      {"duplicate matrix key", F::OpenCV, replace(o, "   rows: 3\n", "   rows: 3\n   rows: 3\n"),
+       {"camera_matrix.rows", "twice"}},
+      {"infinite pixel pitch", F::OpenCV, o + "pixel_pitch_um: .inf\n", {"pixel_pitch_um", "finite"}},
+      {"absurd pixel pitch", F::OpenCV, o + "pixel_pitch_um: 1e300\n", {"pixel_pitch_um", "at most 1000 um"}},
+      {"infinite focal length", F::OpenCV, replace(o, "[ 600.,", "[ .inf,"), {"camera_matrix", "finite"}},
+      {"deep flow nesting", F::OpenCV, o + "x: " + std::string(50000, '[') + std::string(50000, ']') + "\n",
+       {"nested more than 64 levels", "line 16"}},
+      {"deep flow nesting in a comment cannot hide", F::OpenCV,
+       o + "x: [ # ]]]]\n" + std::string(70, '[') + std::string(71, ']') + "\n", {"nested more than 64 levels"}},
+      {"deep dash nesting", F::OpenCV, [&] {
+         std::string t = o + "x:\n";
+         for (int i = 0; i < 200; ++i) t += "- ";
+         return t + "1\n";
+       }(), {"nested more than 64 levels"}},
+      {"deep block nesting", F::OpenCV, [&] {
+         std::string t = o;
+         for (int i = 0; i < 200; ++i) t += std::string(static_cast<std::size_t>(i), ' ') + "k:\n";
+         return t + std::string(200, ' ') + "k: 1\n";
+       }(), {"nested more than 64 levels"}},
+      {"deep JSON nesting", F::OpenCV,
+       "{\"camera_matrix\": 1, \"x\": " + std::string(50000, '[') + std::string(50000, ']') + "}",
+       {"nested more than 64 levels"}},
       // mrcal .cameramodel
       {"malformed mrcal", F::Mrcal, replace(m, "'imagersize': [ 640, 480,],", "'imagersize': [ 640, 480,"),
        {"line 6", "unexpected character '}'"}},
@@ -727,6 +777,16 @@ std::vector<BadInput> bad_inputs() {
       {"deep nesting", F::Mrcal, std::string(100, '['), {"nested too deeply"}},
       {"unclosed string", F::Mrcal, replace(m, "'LENSMODEL_OPENCV4',", "'LENSMODEL_OPENCV4,"), {"line 2", "string"}},
       {"negative focal length", F::Mrcal, replace(m, "[ 600.0, 600.0,", "[ -600.0, 600.0,"), {"fx", "positive"}},
+      {"imagersize past the int range", F::Mrcal, replace(m, "640, 480", "2147483647, 480"),
+       {"imagersize[0]", "65536 px a side"}},
+      {"imagersize too many pixels", F::Mrcal, replace(m, "640, 480", "40000, 40000"),
+       {"imagersize", "40000 x 40000", "1073741824 px"}},
+      {"duplicate key", F::Mrcal, replace(m, "'imagersize'", "'lensmodel': 'LENSMODEL_OPENCV4', 'imagersize'"),
+       {"field 'lensmodel'", "line 5", "twice"}},
+      {"duplicate key of a field glasspiv skips", F::Mrcal,
+       replace(m, "'imagersize'", "'icam_intrinsics': 0, 'icam_intrinsics': 1, 'imagersize'"),
+       {"icam_intrinsics", "twice"}},
+      {"infinite intrinsics", F::Mrcal, replace(m, "600.0, 600.0", "600.0, -inf"), {"intrinsics[1]", "finite"}},
       // DaVis XML
       {"malformed XML", F::Davis, replace(d, "</Header>", "</Headr>"), {"line 3", "malformed XML"}},
       {"not DaVis", F::Davis, "<?xml version=\"1.0\"?><opencv_storage/>", {"<opencv_storage>"}},
@@ -746,6 +806,24 @@ std::vector<BadInput> bad_inputs() {
        {"RadialDistortion.radialDistortionCoefficient3", "k1, k2, p1, p2 only"}},
       {"duplicate identifier", F::Davis, replace(d, "CameraIdentifier=\"2\"", "CameraIdentifier=\"1\""),
        {"CameraIdentifier", "twice"}},
+      {"pixel size 1e308", F::Davis, replace(d, "Value=\"0.0065\"", "Value=\"1e308\""),
+       {"SensorPixelSizeMm.Value", "1e308", "finite"}},
+      {"pixel size of 2 mm", F::Davis, replace(d, "Value=\"0.0065\"", "Value=\"2\""),
+       {"SensorPixelSizeMm.Value", "at most 1000 um"}},
+      {"width past the int range", F::Davis, replace(d, "Width=\"2560\"", "Width=\"2147483647\""),
+       {"OriginalImageSize.Width", "65536 px a side"}},
+      {"image too many pixels", F::Davis,
+       replace(replace(d, "Width=\"2560\"", "Width=\"65536\""), "Height=\"2160\"", "Height=\"65536\""),
+       {"CoordinateMapper[CameraIdentifier=1]/OriginalImageSize", "1073741824 px"}},
+      {"duplicate attribute", F::Davis, replace(d, "Value=\"0.0065\"", "Value=\"0.0065\" Value=\"0.1\""),
+       {"SensorPixelSizeMm.Value", "attribute 'Value' appears twice", "line 13"}},
+      {"duplicate attribute on any element", F::Davis,
+       replace(d, "<Calibration Version=\"3\">", "<Calibration Version=\"3\" Version=\"4\">"),
+       {"Calibration.Version", "twice"}},
+      {"duplicate element", F::Davis,
+       replace(d, "<PrincipalPoint x=\"1280.5\" y=\"1080.2\"/>",
+               "<PrincipalPoint x=\"1280.5\" y=\"1080.2\"/><PrincipalPoint x=\"1.5\" y=\"1.2\"/>"),
+       {"CoordinateMapper[CameraIdentifier=1]/PrincipalPoint", "appears twice"}},
       {"half a pose", F::Davis, replace(d, "<TranslationMm Tx=\"10\" Ty=\"-5\" Tz=\"600\"/>", ""),
        {"TranslationMm", "missing"}},
   };
@@ -807,6 +885,54 @@ TEST(CameraFileRejections, GoodInputsOfTheRejectionTestsParse) {
   // glasspiv: focal_length_mm alone defines the focal length.
   const std::string in_mm = replace(kGoodGlasspiv, "focal_length_px: [7692.3, 7692.3]", "focal_length_mm: [50, 50]");
   EXPECT_NEAR(parse_cameras(in_mm, CameraFileFormat::Glasspiv, "g.yaml")[0].model.fx_px(), 50 / 0.0065, 1e-9);
+}
+
+TEST(CameraFileRejections, InputsAtTheLimitsParse) {
+  // The largest image: 65536 px a side, 2^30 px in all, in every format.
+  const std::string g = replace(kGoodGlasspiv, "[2560, 2160]", "[65536, 16384]");
+  EXPECT_EQ(parse_cameras(g, CameraFileFormat::Glasspiv, "g.yaml")[0].model.width_px(), 65536);
+  const std::string o = replace(replace(kGoodOpenCV, "640", "16384"), "480", "65536");
+  EXPECT_EQ(parse_cameras(o, CameraFileFormat::OpenCV, "o.yaml")[0].model.height_px(), 65536);
+  const std::string m = replace(kGoodMrcal, "640, 480", "32768, 32768");
+  EXPECT_EQ(parse_cameras(m, CameraFileFormat::Mrcal, "m.cameramodel")[0].model.width_px(), 32768);
+  const std::string d = replace(kDavisTwoMappers, "Value=\"0.0065\"", "Value=\"1\"");
+  EXPECT_EQ(*parse_cameras(d, CameraFileFormat::Davis, "d.xml")[0].pixel_pitch_um, 1000.0);
+  // OpenCV nested 64 levels deep (the top-level mapping is one of them).
+  std::string nested = std::string(kGoodOpenCV) + "x: " + std::string(63, '[') + std::string(63, ']') + "\n";
+  EXPECT_NO_THROW(parse_cameras(nested, CameraFileFormat::OpenCV, "o.yaml"));
+  nested = std::string(kGoodOpenCV) + "x: " + std::string(64, '[') + std::string(64, ']') + "\n";
+  EXPECT_THROW(parse_cameras(nested, CameraFileFormat::OpenCV, "o.yaml"), InputError);
+  // Brackets in a quoted text count as nesting but a few do no harm.
+  EXPECT_NO_THROW(parse_cameras(std::string(kGoodOpenCV) + "camera_name: \"cam]]]]\"\n", CameraFileFormat::OpenCV,
+                                "o.yaml"));
+}
+
+TEST(CameraFileRejections, OpenCVMatricesHonourTheirElementType) {
+  // dt: f holds floats: the values are rounded as OpenCV rounds them.
+  const std::string f = replace(replace(kGoodOpenCV, "dt: d", "dt: f"), "320.", "320.1");
+  const Camera camera = parse_cameras(f, CameraFileFormat::OpenCV, "o.yaml")[0];
+  EXPECT_EQ(camera.model.cx_px(), static_cast<double>(320.1f));
+  EXPECT_NE(camera.model.cx_px(), 320.1);
+  // Integer types take the values they can hold, exactly.
+  const std::string w = replace(replace(kGoodOpenCV, "dt: d", "dt: w"), "600., 0., 320., 0., 600., 240., 0., 0., 1.",
+                                "600, 0, 320, 0, 600, 240, 0, 0, 1");
+  const Camera integers = parse_cameras(w, CameraFileFormat::OpenCV, "o.yaml")[0];
+  EXPECT_EQ(integers.model.fx_px(), 600);
+  EXPECT_EQ(integers.model.cy_px(), 240);
+  // An empty distortion matrix (no distortion) stays accepted.
+  const std::string empty =
+      replace(replace(kGoodOpenCV, "   rows: 1\n   cols: 5", "   rows: 0\n   cols: 0"), "[ -0.1, 0.01, 0., 0., 0. ]",
+              "[]");
+  EXPECT_EQ(parse_cameras(empty, CameraFileFormat::OpenCV, "o.yaml")[0].model.lens_model(), LensModel::Pinhole);
+}
+
+TEST_F(CameraFileTest, DeeplyNestedOpenCVFileIsRefusedByEveryEntryPoint) {
+  // 50,000 levels crashed OpenCV's recursive parser (SIGSEGV) in camera show,
+  // camera convert and --initial-camera, which all read through read_camera.
+  const std::string path =
+      put("deep.yaml", std::string(kGoodOpenCV) + "x: " + std::string(50000, '[') + std::string(50000, ']') + "\n");
+  expect_input_error([&] { read_cameras(path); }, path, {"nested more than 64 levels"});
+  expect_input_error([&] { read_camera(path); }, path, {"nested more than 64 levels"});
 }
 
 TEST(CameraFileRejections, MrcalHasNoFourteenCoefficientModel) {

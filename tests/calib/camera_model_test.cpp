@@ -599,6 +599,42 @@ TEST(CameraModel, ConstructorRejectsBadValues) {
   for (int count : kLengths) EXPECT_NO_THROW(CameraModel(640, 480, 500, 500, 320, 240, std::vector<double>(count, 0.0)));
 }
 
+TEST(CameraModel, ImageSizeLimitHoldsForEveryModel) {
+  // A width of 2147483647 reached vector::reserve; 1e8 x 1e8 px never ended.
+  expect_rejected("image width", [] { CameraModel(2147483647, 480, 500, 500, 320, 240); });
+  expect_rejected("image width", [] { CameraModel(kMaxImageSidePx + 1, 480, 500, 500, 320, 240); });
+  expect_rejected("image height", [] { CameraModel(640, kMaxImageSidePx + 1, 500, 500, 320, 240); });
+  expect_rejected("image size", [] { CameraModel(kMaxImageSidePx, kMaxImageSidePx, 500, 500, 320, 240); });
+  expect_rejected("image size", [] { CameraModel(32768, 32769, 500, 500, 320, 240); });
+  EXPECT_NO_THROW(CameraModel(kMaxImageSidePx, 16384, 500, 500, 320, 240));
+  EXPECT_NO_THROW(CameraModel(32768, 32768, 500, 500, 320, 240));
+  try {
+    CameraModel(kMaxImageSidePx + 1, 480, 500, 500, 320, 240);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("65536 px a side"), std::string::npos) << e.what();
+  }
+}
+
+TEST(CameraModel, ImageSizeChecksTheValueBeforeNarrowing) {
+  // Readers pass the value as read, so 1e10 or 640.5 never becomes an int.
+  EXPECT_EQ(checked_image_side_px(640, "w"), 640);
+  EXPECT_EQ(checked_image_side_px(kMaxImageSidePx, "w"), kMaxImageSidePx);
+  for (double bad : {0.0, -1.0, 640.5, 1e10, 1e300, kInf, kNaN, 65537.0}) {
+    EXPECT_THROW(checked_image_side_px(bad, "w"), InputError) << bad;
+    EXPECT_THROW(check_image_size(bad, 480, "size"), InputError) << bad;
+    EXPECT_THROW(check_image_size(640, bad, "size"), InputError) << bad;
+  }
+  EXPECT_THROW(check_image_size(1e8, 1e8, "size"), InputError);
+  EXPECT_NO_THROW(check_image_size(16384, 65536, "size"));
+  try {
+    check_image_size(40000, 40000, "image_size_px");
+    ADD_FAILURE() << "accepted 40000 x 40000";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "image_size_px");
+    EXPECT_NE(e.problem().find("1073741824 px"), std::string::npos) << e.what();
+  }
+}
+
 // 6a. Pure radial r_d = r (1 + k1 r^2), k1 < 0: d r_d / d r = 1 + 3 k1 r^2 = 0 at
 // r = 1/sqrt(-3 k1). fold_radius() is a conservative estimate: at most 3% below.
 TEST(CameraModel, FoldRadiusOfPureRadialModel) {

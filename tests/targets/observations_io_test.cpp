@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -156,6 +157,77 @@ TEST(ObservationsFile, RejectsMalformedFiles) {
       EXPECT_EQ(e.file(), "obs.json");
     }
   }
+}
+
+// Expects an InputError naming `file` and `field`, one line, with every fragment in its message.
+void expect_rejected(const std::string& text, ObservationsFormat format, const std::string& file,
+                     const std::string& field, const std::vector<std::string>& fragments) {
+  try {
+    parse_observations(text, format, file);
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(e.file(), file) << message;
+    EXPECT_EQ(e.field(), field) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    for (const std::string& f : fragments) EXPECT_NE(message.find(f), std::string::npos) << f << " in " << message;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "not an InputError: " << e.what();
+  }
+}
+
+const char* const kJsonHead = R"({"glasspiv_observations": 1, "image_size_px": [640, 480], "target": "t", )";
+
+TEST(ObservationsFile, JsonNumberBeyondADoubleNamesTheField) {
+  // json::parse threw out_of_range.406, which is no InputError.
+  expect_rejected(std::string(kJsonHead) + R"("views": [{"source": "a", "corners": [[0, 1e999, 3, 0, 0, 0]]}]})",
+                  ObservationsFormat::json, "obs.json", "views[0].corners[0][1]", {"1e999", "double"});
+  expect_rejected(R"({"glasspiv_observations": 1, "image_size_px": [-1e999, 480], "target": "t", "views": []})",
+                  ObservationsFormat::json, "obs.json", "image_size_px[0]", {"1e999"});
+  expect_rejected(R"({"glasspiv_observations": 1e400})", ObservationsFormat::json, "obs.json",
+                  "glasspiv_observations", {"1e400"});
+}
+
+TEST(ObservationsFile, DuplicateKeysAreRefused) {
+  // json::parse keeps the last of a key given twice.
+  expect_rejected(std::string(kJsonHead) + R"("views": [], "target": "u"})", ObservationsFormat::json, "obs.json",
+                  "target", {"twice"});
+  expect_rejected(std::string(kJsonHead) + R"("views": [{"source": "a", "source": "b", "corners": []}]})",
+                  ObservationsFormat::json, "obs.json", "views[0].source", {"twice"});
+  const std::string head = "glasspiv_observations: 1\nimage_size_px: [640, 480]\ntarget: t\n";
+  expect_rejected(head + "views: []\ntarget: u\n", ObservationsFormat::yaml, "obs.yaml", "target", {"twice"});
+  expect_rejected(head + "views:\n  - {source: a, source: b, corners: []}\n", ObservationsFormat::yaml, "obs.yaml",
+                  "views[0].source", {"twice"});
+}
+
+TEST(ObservationsFile, ImageSizeHasTheCameraModelsLimit) {
+  auto yaml = [](const std::string& size) {
+    return "glasspiv_observations: 1\nimage_size_px: " + size + "\ntarget: t\nviews: []\n";
+  };
+  auto json = [](const std::string& size) {
+    return R"({"glasspiv_observations": 1, "image_size_px": )" + size + R"(, "target": "t", "views": []})";
+  };
+  for (const std::string size : {"[1e8, 1e8]", "[2147483647, 480]", "[65537, 1]", "[65536, 65536]", "[-640, 480]"}) {
+    SCOPED_TRACE(size);
+    expect_rejected(yaml(size), ObservationsFormat::yaml, "obs.yaml", "image_size_px", {"px"});
+    expect_rejected(json(size), ObservationsFormat::json, "obs.json", "image_size_px", {"px"});
+  }
+  expect_rejected(yaml("[1e8, 1e8]"), ObservationsFormat::yaml, "obs.yaml", "image_size_px",
+                  {"line 2", "65536 px a side"});
+  expect_rejected(json("[40000, 40000]"), ObservationsFormat::json, "obs.json", "image_size_px", {"1073741824 px"});
+  EXPECT_EQ(parse_observations(yaml("[65536, 16384]"), ObservationsFormat::yaml, "obs.yaml").image_width_px, 65536);
+  EXPECT_EQ(parse_observations(json("[16384, 65536]"), ObservationsFormat::json, "obs.json").image_height_px, 65536);
+  // The writers hold to it too.
+  Observations o = sample(3);
+  o.image_width_px = 70000;
+  EXPECT_THROW(format_observations(o, ObservationsFormat::json), InputError);
+}
+
+TEST(ObservationsFile, DeepJsonIsRefused) {
+  std::string field = "views";
+  for (int level = 2; level <= 64; ++level) field += "[0]";  // the 65th level: 64 open below the root
+  expect_rejected(std::string(kJsonHead) + R"("views": )" + std::string(100000, '[') + std::string(100000, ']') + "}",
+                  ObservationsFormat::json, "obs.json", field, {"nested more than 64 levels"});
 }
 
 TargetSpec charuco_5x4() {
