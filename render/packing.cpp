@@ -1,8 +1,11 @@
 #include "render/packing.h"
 
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
+
+#include "util/input_error.h"
 
 namespace glasspiv {
 
@@ -46,6 +49,16 @@ int spheres_in_layer(const Packing& packing, int layer) {
   return grid[0] * grid[1];
 }
 
+std::uint64_t packing_sphere_count(const Packing& packing) {
+  if (packing.layers < 1 || packing.layer_size[0] < 1 || packing.layer_size[1] < 1) return 0;
+  // In double: exact below 2^53, and the comparisons with the limits need no more.
+  const std::array<int, 2> even = layer_grid(packing, 0), odd = layer_grid(packing, 1);
+  const double even_layers = std::ceil(packing.layers / 2.0), odd_layers = std::floor(packing.layers / 2.0);
+  const double n = even_layers * double(even[0]) * double(even[1]) + odd_layers * double(odd[0]) * double(odd[1]);
+  if (!(n < 18446744073709549568.0)) return std::numeric_limits<std::uint64_t>::max();
+  return static_cast<std::uint64_t>(n);
+}
+
 Eigen::Vector3d packing_sphere_centre(const Packing& packing, int layer, int i, int j) {
   const LatticeGeometry g = lattice_geometry(packing.lattice, packing.diameter_mm);
   const double shift = g.odd_layers_shifted && layer % 2 == 1 ? g.pitch_mm / 2 : 0.0;
@@ -53,7 +66,13 @@ Eigen::Vector3d packing_sphere_centre(const Packing& packing, int layer, int i, 
 }
 
 std::vector<SphereSolid> expand_packing(const Packing& packing) {
+  const std::uint64_t count = packing_sphere_count(packing);
+  if (count > kMaxSceneSolids)
+    throw InputError("", packing.field,
+                     fmt::format("expands to {} spheres, more than the {} solids a scene may hold", count,
+                                 kMaxSceneSolids));
   std::vector<SphereSolid> spheres;
+  spheres.reserve(static_cast<std::size_t>(count));
   for (int layer = 0; layer < packing.layers; ++layer) {
     const auto grid = layer_grid(packing, layer);
     for (int j = 0; j < grid[1]; ++j)

@@ -13,6 +13,7 @@
 //        in the layer, 4 above and 4 below)
 // Even layers hold nx x ny spheres; odd bcc/fcc layers hold the (nx-1) x (ny-1)
 // sites inside the first layer's footprint.
+#include <cstdint>
 #include <vector>
 
 #include "render/scene.h"
@@ -31,8 +32,14 @@ LatticeGeometry lattice_geometry(Lattice lattice, double diameter_mm);
 // Number of spheres in layer `layer` (0-based).
 int spheres_in_layer(const Packing& packing, int layer);
 
+// Number of spheres the packing expands to, computed without expanding it and
+// without overflow (saturating at UINT64_MAX; 0 for non-positive counts).
+std::uint64_t packing_sphere_count(const Packing& packing);
+
 // The packing's spheres, layer by layer, j-major then i, with their material
 // after the overrides and field "packings[k].spheres[layer,i,j]" (k from packing.field).
+// Throws InputError("", packing.field, ...) before allocating anything if the
+// packing holds more than kMaxSceneSolids spheres (render/scene.h).
 std::vector<SphereSolid> expand_packing(const Packing& packing);
 
 // The centre of sphere (layer, i, j); i, j index the layer's own grid.

@@ -1,7 +1,12 @@
 #include "render/scene.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <map>
 #include <set>
+#include <unordered_map>
+#include <utility>
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
@@ -57,7 +62,27 @@ Material Scene::material(const std::string& name, const std::string& field) cons
   }
 }
 
+void check_solid_count(const Scene& scene) {
+  // total <= kMaxSceneSolids throughout, so nothing below overflows.
+  std::uint64_t total = 0;
+  auto add = [&](const std::string& field, std::uint64_t n, const char* what) {
+    if (n > kMaxSceneSolids - total)
+      throw InputError(scene.source, field,
+                       fmt::format("{} {}; with the {} solids before it that is more than the {} solids a scene may "
+                                   "hold (packings' spheres included)",
+                                   what, n, total, kMaxSceneSolids));
+    total += n;
+  };
+  const std::size_t listed = scene.spheres.size() + scene.boxes.size() + scene.slabs.size() + scene.cylinders.size() +
+                             scene.rectangles.size();
+  add("solids", listed, "lists solids:");
+  add("meshes", scene.meshes.size(), "lists meshes:");
+  for (const Packing& p : scene.packings)
+    add(p.field.empty() ? "packings" : p.field, packing_sphere_count(p), "expands to spheres:");
+}
+
 std::vector<SphereSolid> Scene::all_spheres() const {
+  check_solid_count(*this);
   std::vector<SphereSolid> all = spheres;
   for (const Packing& packing : packings) {
     std::vector<SphereSolid> expanded = expand_packing(packing);
@@ -68,14 +93,36 @@ std::vector<SphereSolid> Scene::all_spheres() const {
 
 namespace {
 
+std::string vector_text(const Eigen::Vector3d& v) { return fmt::format("[{}, {}, {}]", v.x(), v.y(), v.z()); }
+
 class Checker {
  public:
   explicit Checker(const Scene& scene) : scene_(scene) {}
   [[noreturn]] void fail(const std::string& field, const std::string& problem) const {
     throw InputError(scene_.source, field, problem);
   }
-  void positive(double value, const std::string& field) const {
-    if (!std::isfinite(value) || value <= 0) fail(field, fmt::format("must be positive, got {}", value));
+  // A length in mm: finite, in [kMinSceneSize_mm, kMaxSceneSize_mm].
+  void size(double value, const std::string& field) const {
+    const std::string range = fmt::format("sizes lie in [{}, {}] mm", kMinSceneSize_mm, kMaxSceneSize_mm);
+    if (!std::isfinite(value) || value <= 0) fail(field, fmt::format("must be positive, got {} ({})", value, range));
+    if (value < kMinSceneSize_mm)
+      fail(field, fmt::format("is {} mm, smaller than the {} mm a scene resolves ({})", value, kMinSceneSize_mm, range));
+    if (value > kMaxSceneSize_mm)
+      fail(field, fmt::format("is {} mm, larger than the {} mm a scene may span ({}; the unit is mm)", value,
+                              kMaxSceneSize_mm, range));
+  }
+  // A point in mm: finite, every coordinate within +-kMaxSceneCoordinate_mm.
+  void coordinate(const Eigen::Vector3d& v, const std::string& field) const {
+    finite(v, field);
+    if (v.cwiseAbs().maxCoeff() > kMaxSceneCoordinate_mm)
+      fail(field, fmt::format("{} mm lies outside the scene's limit: every coordinate within +-{} mm of the origin "
+                              "(the unit is mm)",
+                              vector_text(v), kMaxSceneCoordinate_mm));
+  }
+  // A number in [lo, hi], finite.
+  void within(double value, double lo, double hi, const std::string& field, const std::string& unit) const {
+    if (!std::isfinite(value) || value < lo || value > hi)
+      fail(field, fmt::format("must lie in [{}, {}]{}, got {}", lo, hi, unit, value));
   }
   void finite(const Eigen::Vector3d& v, const std::string& field) const {
     if (!v.allFinite()) fail(field, "must be finite");
@@ -86,16 +133,23 @@ class Checker {
     if (std::fabs(v.norm() - 1) > kAxisLengthTolerance)
       fail(field, fmt::format("must be a unit vector, has length {}", v.norm()));
   }
-  Material material(const std::string& name, const std::string& field, bool solid = true) const {
+  Material material(const std::string& name, const std::string& field) const {
     const Material m = scene_.material(name, field);
     if (m.kind != MaterialKind::opaque) {
+      double n = 0;
       try {
-        (void)m.refractive_index(scene_.wavelength_nm);
+        n = m.refractive_index(scene_.wavelength_nm);
       } catch (const InputError& e) {
         fail(field, "material '" + name + "' at wavelength_nm: " + e.problem());
       }
+      if (!std::isfinite(n) || n < kMinRefractiveIndex || n > kMaxRefractiveIndex)
+        fail(field, fmt::format("material '{}' has refractive index {} at {} nm; indices lie in [{}, {}]", name, n,
+                                scene_.wavelength_nm, kMinRefractiveIndex, kMaxRefractiveIndex));
+      if (m.absorption_per_mm)
+        within(*m.absorption_per_mm, 0, kMaxAbsorption_per_mm, field, " per mm (absorption of '" + name + "')");
+    } else if (m.albedo) {
+      within(*m.albedo, 0, 1, field, " (albedo of '" + name + "')");
     }
-    (void)solid;
     return m;
   }
 
@@ -103,60 +157,123 @@ class Checker {
   const Scene& scene_;
 };
 
+// The first sphere (in index order) that overlaps an earlier one by more than
+// kSphereOverlapTolerance_mm, with the earliest sphere it overlaps: (earlier,
+// later). Spheres are bucketed by size class (diameters in (2^(L-1), 2^L]) into
+// hash grids of cell 2^L, and each sphere is tested against the earlier ones
+// near it in every class (or all of a class when that is fewer), so that
+// scenes of kMaxSceneSolids spheres validate in well under a second.
+std::optional<std::pair<std::size_t, std::size_t>> first_sphere_overlap(const std::vector<SphereSolid>& spheres) {
+  using Key = std::array<std::int64_t, 3>;
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const {
+      std::uint64_t h = 1469598103934665603ull;
+      for (const std::int64_t v : k) h = (h ^ static_cast<std::uint64_t>(v)) * 1099511628211ull;
+      return static_cast<std::size_t>(h ^ (h >> 29));
+    }
+  };
+  struct SizeClass {
+    double cell = 0;
+    std::unordered_map<Key, std::vector<std::size_t>, KeyHash> grid;
+    std::vector<std::size_t> members;
+  };
+  std::map<int, SizeClass> classes;
+  auto key = [](const Eigen::Vector3d& p, double cell) {
+    return Key{static_cast<std::int64_t>(std::floor(p.x() / cell)), static_cast<std::int64_t>(std::floor(p.y() / cell)),
+               static_cast<std::int64_t>(std::floor(p.z() / cell))};
+  };
+  for (std::size_t i = 0; i < spheres.size(); ++i) {
+    const SphereSolid& a = spheres[i];
+    std::optional<std::size_t> earliest;
+    auto test = [&](std::size_t j) {
+      const SphereSolid& b = spheres[j];
+      if ((!earliest || j < *earliest) &&
+          (a.centre_mm - b.centre_mm).norm() < (a.diameter_mm + b.diameter_mm) / 2 - kSphereOverlapTolerance_mm)
+        earliest = j;
+    };
+    for (const auto& [level, c] : classes) {
+      const double reach = a.diameter_mm / 2 + c.cell / 2;  // no member's radius exceeds cell / 2
+      const Key lo = key(a.centre_mm.array() - reach, c.cell), hi = key(a.centre_mm.array() + reach, c.cell);
+      double cells = 1;
+      for (int k = 0; k < 3; ++k) cells *= double(hi[k] - lo[k] + 1);
+      if (cells > double(c.members.size())) {
+        for (const std::size_t j : c.members) test(j);
+        continue;
+      }
+      for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+        for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+          for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+            const auto it = c.grid.find(Key{x, y, z});
+            if (it != c.grid.end())
+              for (const std::size_t j : it->second) test(j);
+          }
+    }
+    if (earliest) return std::make_pair(*earliest, i);
+    const int level = static_cast<int>(std::ceil(std::log2(a.diameter_mm)));
+    SizeClass& c = classes[level];
+    if (c.members.empty()) c.cell = std::ldexp(1.0, level);
+    c.members.push_back(i);
+    c.grid[key(a.centre_mm, c.cell)].push_back(i);
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 void validate(const Scene& scene) {
   const Checker c(scene);
-  if (!std::isfinite(scene.wavelength_nm) || scene.wavelength_nm <= 0)
-    c.fail("wavelength_nm", fmt::format("must be positive, got {}", scene.wavelength_nm));
+  c.within(scene.wavelength_nm, kMinWavelength_nm, kMaxWavelength_nm, "wavelength_nm", " nm");
   if (c.material(scene.fluid, "fluid").kind == MaterialKind::opaque)
     c.fail("fluid", "'" + scene.fluid + "' is opaque; the fluid must be transparent");
   for (const auto& [name, m] : scene.materials) c.material(name, "materials." + name);
+  check_solid_count(scene);
 
   for (const SphereSolid& s : scene.spheres) {
-    c.finite(s.centre_mm, s.field + ".centre_mm");
-    c.positive(s.diameter_mm, s.field + ".diameter_mm");
+    c.coordinate(s.centre_mm, s.field + ".centre_mm");
+    c.size(s.diameter_mm, s.field + ".diameter_mm");
     c.material(s.material, s.field + ".material");
   }
   for (const BoxSolid& b : scene.boxes) {
-    c.finite(b.centre_mm, b.field + ".centre_mm");
-    for (int k = 0; k < 3; ++k) c.positive(b.size_mm[k], fmt::format("{}.size_mm[{}]", b.field, k));
+    c.coordinate(b.centre_mm, b.field + ".centre_mm");
+    for (int k = 0; k < 3; ++k) c.size(b.size_mm[k], fmt::format("{}.size_mm[{}]", b.field, k));
     const Eigen::Matrix3d rtr = b.world_from_box.transpose() * b.world_from_box;
     if (!b.world_from_box.allFinite() || !rtr.isIdentity(1e-9) || b.world_from_box.determinant() < 0)
       c.fail(b.field + ".rotation", "must be a rotation");
     c.material(b.material, b.field + ".material");
   }
   for (const SlabSolid& s : scene.slabs) {
-    c.finite(s.point_mm, s.field + ".point_mm");
+    c.coordinate(s.point_mm, s.field + ".point_mm");
     c.unit(s.normal, s.field + ".normal");
     c.unit(s.up, s.field + ".up");
     if (s.up.normalized().cross(s.normal.normalized()).norm() < 1e-6)
       c.fail(s.field + ".up", "must not be parallel to the normal");
-    c.positive(s.thickness_mm, s.field + ".thickness_mm");
-    for (int k = 0; k < 2; ++k) c.positive(s.extent_mm[k], fmt::format("{}.extent_mm[{}]", s.field, k));
+    c.size(s.thickness_mm, s.field + ".thickness_mm");
+    for (int k = 0; k < 2; ++k) c.size(s.extent_mm[k], fmt::format("{}.extent_mm[{}]", s.field, k));
     c.material(s.material, s.field + ".material");
   }
   for (const CylinderSolid& s : scene.cylinders) {
-    c.finite(s.base_centre_mm, s.field + ".base_centre_mm");
+    c.coordinate(s.base_centre_mm, s.field + ".base_centre_mm");
     c.unit(s.axis, s.field + ".axis");
-    c.positive(s.radius_mm, s.field + ".radius_mm");
-    c.positive(s.length_mm, s.field + ".length_mm");
+    c.size(s.radius_mm, s.field + ".radius_mm");
+    c.size(s.length_mm, s.field + ".length_mm");
     c.material(s.material, s.field + ".material");
   }
   for (const RectangleSolid& r : scene.rectangles) {
-    c.finite(r.centre_mm, r.field + ".centre_mm");
+    c.coordinate(r.centre_mm, r.field + ".centre_mm");
     c.unit(r.normal, r.field + ".normal");
     c.unit(r.up, r.field + ".up");
     if (r.up.normalized().cross(r.normal.normalized()).norm() < 1e-6)
       c.fail(r.field + ".up", "must not be parallel to the normal");
-    for (int k = 0; k < 2; ++k) c.positive(r.size_mm[k], fmt::format("{}.size_mm[{}]", r.field, k));
+    for (int k = 0; k < 2; ++k) c.size(r.size_mm[k], fmt::format("{}.size_mm[{}]", r.field, k));
     if (!r.material.empty() && c.material(r.material, r.field + ".material").kind != MaterialKind::opaque)
       c.fail(r.field + ".material", "a rectangle is a thin opaque surface; '" + r.material + "' is not opaque");
   }
   for (const MeshSolid& m : scene.meshes) {
     if (m.file.empty()) c.fail(m.field + ".file", "must name a mesh file");
-    c.positive(m.placement.scale, m.field + ".scale");
-    c.finite(m.placement.position_mm, m.field + ".position_mm");
+    if (!std::isfinite(m.placement.scale) || m.placement.scale <= 0)
+      c.fail(m.field + ".scale", fmt::format("must be positive, got {}", m.placement.scale));
+    c.within(m.placement.scale, kMinMeshScale, kMaxMeshScale, m.field + ".scale", " (file units to mm)");
+    c.coordinate(m.placement.position_mm, m.field + ".position_mm");
     const Eigen::Matrix3d& r = m.placement.world_from_mesh;
     if (!r.allFinite() || !(r.transpose() * r).isIdentity(1e-9) || r.determinant() < 0)
       c.fail(m.field + ".rotation_deg", "must be a rotation");
@@ -166,54 +283,67 @@ void validate(const Scene& scene) {
     c.material(m.material, m.field + ".material");
   }
   for (const Packing& p : scene.packings) {
-    c.positive(p.diameter_mm, p.field + ".diameter_mm");
-    c.finite(p.origin_mm, p.field + ".origin_mm");
+    c.size(p.diameter_mm, p.field + ".diameter_mm");
+    c.coordinate(p.origin_mm, p.field + ".origin_mm");
     if (p.layers < 1) c.fail(p.field + ".layers", fmt::format("must be 1 or more, got {}", p.layers));
     for (int k = 0; k < 2; ++k)
       if (p.layer_size[k] < 1)
         c.fail(fmt::format("{}.layer_size[{}]", p.field, k), fmt::format("must be 1 or more, got {}", p.layer_size[k]));
+    // The far corner of the lattice (its sites only grow from origin_mm along +x, +y, +z).
+    const LatticeGeometry g = lattice_geometry(p.lattice, p.diameter_mm);
+    const Eigen::Vector3d far = p.origin_mm + Eigen::Vector3d(double(p.layer_size[0] - 1) * g.pitch_mm,
+                                                              double(p.layer_size[1] - 1) * g.pitch_mm,
+                                                              double(p.layers - 1) * g.layer_spacing_mm);
+    if (!far.allFinite() || far.cwiseAbs().maxCoeff() > kMaxSceneCoordinate_mm)
+      c.fail(p.field, fmt::format("its last sphere lies at {} mm, outside the scene's limit: every coordinate within "
+                                  "+-{} mm of the origin",
+                                  vector_text(far), kMaxSceneCoordinate_mm));
     c.material(p.material, p.field + ".material");
+    if (p.overrides.size() > kMaxPackingOverrides)
+      c.fail(p.field + ".overrides", fmt::format("has {} entries, more than the {} a packing may have",
+                                                 p.overrides.size(), kMaxPackingOverrides));
     for (const PackingOverride& o : p.overrides) {
       if (o.sphere.has_value() == o.region_mm.has_value())
         c.fail(o.field, "needs exactly one of 'sphere' and 'region'");
       c.material(o.material, o.field + ".material");
       if (o.sphere) {
         const auto [layer, i, j] = *o.sphere;
-        const int shrink = lattice_geometry(p.lattice, p.diameter_mm).odd_layers_shifted && layer % 2 == 1 ? 1 : 0;
+        const int shrink = g.odd_layers_shifted && layer % 2 == 1 ? 1 : 0;
         if (layer < 0 || layer >= p.layers || i < 0 || j < 0 || i >= p.layer_size[0] - shrink ||
             j >= p.layer_size[1] - shrink)
           c.fail(o.field + ".sphere", fmt::format("no sphere [{}, {}, {}] in this packing", layer, i, j));
       } else {
         const auto& [lo, hi] = *o.region_mm;
+        c.coordinate(lo, o.field + ".region.min_mm");
+        c.coordinate(hi, o.field + ".region.max_mm");
         if (!(lo.array() <= hi.array()).all()) c.fail(o.field + ".region", "min_mm must not exceed max_mm");
       }
     }
   }
 
-  // Spheres may touch but not overlap (O(n^2): packings here hold hundreds of spheres).
+  // Spheres may touch but not overlap: the first that overlaps an earlier one is named.
   const std::vector<SphereSolid> spheres = scene.all_spheres();
-  for (std::size_t a = 0; a < spheres.size(); ++a)
-    for (std::size_t b = a + 1; b < spheres.size(); ++b) {
-      const double distance = (spheres[a].centre_mm - spheres[b].centre_mm).norm();
-      const double touching = (spheres[a].diameter_mm + spheres[b].diameter_mm) / 2;
-      if (distance < touching - kSphereOverlapTolerance_mm)
-        c.fail(spheres[b].field, fmt::format("overlaps {}: centres {:.6g} mm apart, radii sum to {:.6g} mm",
-                                             spheres[a].field, distance, touching));
-    }
+  if (const auto pair = first_sphere_overlap(spheres)) {
+    const SphereSolid& a = spheres[pair->first];
+    const SphereSolid& b = spheres[pair->second];
+    c.fail(b.field, fmt::format("overlaps {}: centres {:.6g} mm apart, radii sum to {:.6g} mm", a.field,
+                                (a.centre_mm - b.centre_mm).norm(), (a.diameter_mm + b.diameter_mm) / 2));
+  }
 
   if (scene.sheet) {
     const Sheet& s = *scene.sheet;
-    c.finite(s.origin_mm, "sheet.origin_mm");
+    c.coordinate(s.origin_mm, "sheet.origin_mm");
     c.unit(s.s_axis, "sheet.s_axis");
     c.unit(s.t_axis, "sheet.t_axis");
     const double dot = s.s_axis.normalized().dot(s.t_axis.normalized());
     if (std::fabs(dot) > kAxisOrthogonalityTolerance)
       c.fail("sheet.t_axis", fmt::format("must be orthogonal to s_axis (dot product {:.6g})", dot));
-    for (int k = 0; k < 2; ++k) c.positive(s.extent_mm[k], fmt::format("sheet.extent_mm[{}]", k));
-    c.positive(s.thickness_mm, "sheet.thickness_mm");
+    for (int k = 0; k < 2; ++k) c.size(s.extent_mm[k], fmt::format("sheet.extent_mm[{}]", k));
+    c.size(s.thickness_mm, "sheet.thickness_mm");
   }
   if (!std::isfinite(scene.background.radiance) || scene.background.radiance < 0)
     c.fail("background.radiance", fmt::format("must be 0 or more, got {}", scene.background.radiance));
+  c.within(scene.background.radiance, 0, kMaxBackgroundRadiance, "background.radiance", "");
 
   std::set<std::string> names;
   for (const SceneCamera& cam : scene.cameras) {
@@ -223,6 +353,12 @@ void validate(const Scene& scene) {
     if (!pose.rotation.allFinite() || !pose.translation_mm.allFinite() ||
         !(pose.rotation.transpose() * pose.rotation).isIdentity(1e-9))
       c.fail(cam.field + ".pose", "must be a finite rigid transform");
+    const Eigen::Vector3d position = -(pose.rotation.transpose() * pose.translation_mm);
+    if (position.cwiseAbs().maxCoeff() > kMaxSceneCoordinate_mm)
+      c.fail(cam.field + ".pose",
+             fmt::format("puts the camera at {} mm, outside the scene's limit: every coordinate within +-{} mm of the "
+                         "origin",
+                         vector_text(position), kMaxSceneCoordinate_mm));
   }
 }
 

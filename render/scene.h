@@ -4,6 +4,7 @@
 // the file format). Units: mm, nm; rotations are stored as matrices (files give
 // degrees or radians as docs/scene.md says). World frame: the user's; every pose
 // is destination_from_source (docs/conventions.md).
+#include <cstddef>
 #include <array>
 #include <map>
 #include <optional>
@@ -161,12 +162,45 @@ struct Scene {
   // The material of a name: the scene's own first, then the catalogue. Throws
   // InputError(source, field, "unknown material ...") otherwise.
   Material material(const std::string& name, const std::string& field = "material") const;
-  // The explicit spheres followed by every packing's spheres.
+  // The explicit spheres followed by every packing's spheres. check_solid_count
+  // first: InputError beyond kMaxSceneSolids, before anything is expanded.
   std::vector<SphereSolid> all_spheres() const;
 };
 
+// The limits every scene is held to (validate() refuses anything beyond them,
+// naming the field and the limit). Coordinates in mm (solid centres and points,
+// mesh positions, packing sites, override regions, the sheet's origin, camera
+// positions) lie within +-kMaxSceneCoordinate_mm of the origin on every axis;
+// sizes in mm (diameters, radii, lengths, box sizes, extents, thicknesses) in
+// [kMinSceneSize_mm, kMaxSceneSize_mm]. A scene holds at most kMaxSceneSolids
+// solids, the spheres its packings expand to included (counted before any
+// packing is expanded), and a packing at most kMaxPackingOverrides overrides.
+constexpr double kMaxSceneCoordinate_mm = 1e6;  // 1 km
+constexpr double kMinSceneSize_mm = 1e-3;       // 1 um
+constexpr double kMaxSceneSize_mm = 1e6;
+constexpr std::size_t kMaxSceneSolids = 100000;
+constexpr std::size_t kMaxPackingOverrides = 1000;
+// wavelength_nm lies in [kMinWavelength_nm, kMaxWavelength_nm]; a constant
+// refractive index ({index: n}) in [kMinRefractiveIndex, kMaxRefractiveIndex]
+// (vacuum relative to air is 0.9997); absorption_per_mm in [0, kMaxAbsorption_per_mm];
+// background.radiance in [0, kMaxBackgroundRadiance]; a mesh's scale in
+// [kMinMeshScale, kMaxMeshScale].
+constexpr double kMinWavelength_nm = 100;
+constexpr double kMaxWavelength_nm = 20000;
+constexpr double kMinRefractiveIndex = 0.5;
+constexpr double kMaxRefractiveIndex = 10;
+constexpr double kMaxAbsorption_per_mm = 1e6;
+constexpr double kMaxBackgroundRadiance = 1e6;
+constexpr double kMinMeshScale = 1e-6;
+constexpr double kMaxMeshScale = 1e6;
+
+// Throws InputError(scene.source, field, problem) unless the scene holds at most
+// kMaxSceneSolids solids, counting the spheres of every packing without
+// expanding it (the field names the packing or solid list that goes over).
+void check_solid_count(const Scene& scene);
+
 // Checks what the data alone can tell, throwing InputError(scene.source, field path,
-// problem) at the first fault: positive sizes, unit and non-zero axes, orthonormal
+// problem) at the first fault: the limits above, positive sizes, unit and non-zero axes, orthonormal
 // sheet axes, known materials (fluid not opaque), refractive indices defined at the
 // wavelength, packing overrides that select something, no two spheres overlapping by
 // more than 1e-6 mm (touching is fine), unique camera names, cameras with a pose,

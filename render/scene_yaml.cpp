@@ -127,6 +127,38 @@ std::string resolve(const std::string& scene_path, const std::string& name) {
   return (fs::path(scene_path).parent_path() / p).lexically_normal().string();
 }
 
+// A name for a message: control characters as '?', long names shortened, so
+// that the message stays one readable line.
+std::string shown(const std::string& name) {
+  std::string out;
+  for (const char ch : name) out += static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f ? '?' : ch;
+  if (out.size() > 120) out = out.substr(0, 60) + "..." + out.substr(out.size() - 40);
+  return "'" + out + "'" + (name.size() > 120 ? fmt::format(" ({} characters)", name.size()) : "");
+}
+
+// The file a scene names at `key` (camera, mesh, texture), resolved against
+// the scene file's folder. InputError naming the scene file and the field
+// unless it names an existing regular file: empty, too long or otherwise
+// refused by the system, missing, a folder.
+std::string existing_file(Reader& r, const Map& m, const std::string& key, const std::string& what) {
+  const YAML::Node node = m.required(key);
+  const std::string field = m.path(key);
+  const std::string name = r.text(node, field);
+  if (name.empty()) r.fail(field, node, "must name a " + what);
+  const std::string file = resolve(r.path(), name);
+  const std::string where = file == name ? "" : " (resolved to " + shown(file) + ")";
+  std::error_code ec;
+  const fs::file_status status = fs::status(file, ec);
+  if (status.type() == fs::file_type::not_found)
+    r.fail(field, node, what + " " + shown(name) + " does not exist" + where);
+  if (ec) r.fail(field, node, what + " " + shown(name) + " cannot be used: " + ec.message() + where);
+  if (status.type() == fs::file_type::directory)
+    r.fail(field, node, what + " " + shown(name) + " is a folder, expected a file" + where);
+  if (status.type() != fs::file_type::regular)
+    r.fail(field, node, what + " " + shown(name) + " is not a regular file" + where);
+  return file;
+}
+
 Material read_material(Reader& r, const std::string& name, const YAML::Node& node, const std::string& field) {
   try {
     if (node.IsScalar()) {
@@ -146,10 +178,16 @@ Material read_material(Reader& r, const std::string& name, const YAML::Node& nod
   }
   const double n = m.real("index");
   if (n <= 0) r.fail(m.path("index"), m.required("index"), "must be positive");
+  if (n < kMinRefractiveIndex || n > kMaxRefractiveIndex)
+    r.fail(m.path("index"), m.required("index"),
+           fmt::format("must lie in [{}, {}], got {}", kMinRefractiveIndex, kMaxRefractiveIndex, n));
   Material mat = material_with_index(name, n);
   if (m.has("absorption_per_mm")) {
     const double a = m.real("absorption_per_mm");
     if (a < 0) r.fail(m.path("absorption_per_mm"), m.required("absorption_per_mm"), "must be 0 or more");
+    if (a > kMaxAbsorption_per_mm)
+      r.fail(m.path("absorption_per_mm"), m.required("absorption_per_mm"),
+             fmt::format("must lie in [0, {}] per mm, got {}", kMaxAbsorption_per_mm, a));
     mat.absorption_per_mm = a;
   }
   return mat;
@@ -167,11 +205,7 @@ MeshSolid read_mesh(Reader& r, const YAML::Node& node, const std::string& field,
   const Map m(r, node, field, keys);
   MeshSolid mesh;
   mesh.field = field;
-  const std::string name = m.text("file");
-  mesh.file = resolve(r.path(), name);
-  if (!fs::exists(mesh.file))
-    r.fail(m.path("file"), m.required("file"),
-           "mesh file '" + name + "' does not exist (resolved to '" + mesh.file + "')");
+  mesh.file = existing_file(r, m, "file", "mesh file");
   mesh.placement.scale = m.real_or("scale", 1);
   if (m.has("position_mm")) mesh.placement.position_mm = m.vec3("position_mm");
   if (m.has("rotation_deg")) mesh.placement.world_from_mesh = rotation_from_rvec_deg(m.vec3("rotation_deg"));
@@ -234,9 +268,7 @@ void read_solid(Reader& r, const YAML::Node& node, const std::string& field, Sce
     rect.normal = m.axis("normal");
     rect.up = m.axis("up");
     if (m.has("texture")) {
-      rect.texture = resolve(r.path(), m.text("texture"));
-      if (!fs::exists(rect.texture))
-        r.fail(m.path("texture"), m.required("texture"), "texture image '" + rect.texture + "' does not exist");
+      rect.texture = existing_file(r, m, "texture", "texture image");
     }
     if (m.has("material")) rect.material = m.text("material");
     rect.field = field;
@@ -309,11 +341,15 @@ SceneCamera read_camera_entry(Reader& r, const YAML::Node& node, const std::stri
   std::optional<Camera> camera;
   std::string file;
   if (m.has("file")) {
-    file = resolve(r.path(), m.text("file"));
-    if (!fs::exists(file))
-      r.fail(m.path("file"), m.required("file"),
-             "camera file '" + m.text("file") + "' does not exist (resolved to '" + file + "')");
-    camera = read_camera(file);
+    file = existing_file(r, m, "file", "camera file");
+    try {
+      camera = read_camera(file);
+    } catch (const InputError& e) {
+      // A problem of the file as a whole (it cannot be read) is the scene's field's;
+      // one inside it names the camera file and its field.
+      if (!e.field().empty()) throw;
+      r.fail(m.path("file"), m.required("file"), "camera file " + shown(m.text("file")) + ": " + e.problem());
+    }
   } else {
     YAML::Node model = YAML::Clone(m.required("model"));
     if (!model.IsMap()) r.fail(m.path("model"), m.required("model"), "must be a mapping of glasspiv camera fields");

@@ -1,6 +1,8 @@
 #include "render/transport_map_file.h"
 
 #include <array>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <stdexcept>
@@ -163,6 +165,12 @@ std::uint64_t payload_bytes(std::uint64_t pixels, std::uint64_t crossings, bool 
   return padded8(4 * (pixels + 1)) + per_crossing_f32 + padded8(crossings) + 2 * padded8(4 * pixels);
 }
 
+std::string number(double v) {
+  char s[32];
+  std::snprintf(s, sizeof s, "%.9g", v);
+  return s;
+}
+
 // The first problem of tag, or "" (shared by writer and reader; pixel_offsets:
 // offsets_problem, util/binary_file.h).
 std::string tag_problem(const std::vector<std::uint8_t>& tag) {
@@ -171,6 +179,27 @@ std::string tag_problem(const std::vector<std::uint8_t>& tag) {
       return "tag[" + std::to_string(i) + "] is " + std::to_string(tag[i]) +
              ", expected 0 (direct), 1 (refracted_only) or 2 (with_reflections)";
   return "";
+}
+
+// The first value that no traced map holds, as (field, problem), or {"", ""}
+// (shared by writer and reader): s, t and the footprint Jacobians must be
+// finite; every weight finite and not negative.
+std::pair<std::string, std::string> values_problem(const TransportMap& m) {
+  const std::pair<const char*, const std::vector<float>*> finite[] = {
+      {"s_mm", &m.s_mm}, {"t_mm", &m.t_mm}, {"ds_dcol", &m.ds_dcol},
+      {"ds_drow", &m.ds_drow}, {"dt_dcol", &m.dt_dcol}, {"dt_drow", &m.dt_drow}};
+  for (const auto& [name, v] : finite)
+    for (std::size_t i = 0; i < v->size(); ++i)
+      if (!std::isfinite((*v)[i]))
+        return {name, std::string(name) + "[" + std::to_string(i) + "] is " + number((*v)[i]) + ", must be finite"};
+  const std::pair<const char*, const std::vector<float>*> weights[] = {
+      {"weight", &m.weight}, {"background_weight", &m.background_weight}, {"opaque_weight", &m.opaque_weight}};
+  for (const auto& [name, v] : weights)
+    for (std::size_t i = 0; i < v->size(); ++i)
+      if (!(std::isfinite((*v)[i]) && (*v)[i] >= 0))
+        return {name, std::string(name) + "[" + std::to_string(i) + "] is " + number((*v)[i]) +
+                          ", must be finite and not negative"};
+  return {};
 }
 
 // ---------------------------------------------------------------- reading
@@ -240,6 +269,7 @@ TransportMap read_body(BinaryFileReader& in, const Header& h) {
       !p.empty())
     throw InputError(path, "pixel_offsets", p);
   if (const std::string p = tag_problem(map.tag); !p.empty()) throw InputError(path, "tag", p);
+  if (const auto [field, p] = values_problem(map); !field.empty()) throw InputError(path, field, p);
   return map;
 }
 
@@ -310,6 +340,7 @@ void write_transport_map(const std::string& path, const TransportMap& map, std::
   if (std::string p = offsets_problem(map.pixel_offsets, crossings, "pixel_offsets", "crossing count"); !p.empty())
     bad("pixel_offsets: " + p);
   if (std::string p = tag_problem(map.tag); !p.empty()) bad("tag: " + p);
+  if (const auto [field, p] = values_problem(map); !field.empty()) bad(field + ": " + p);
 
   Header h;
   h.version = kTransportMapFormatVersion;

@@ -39,8 +39,7 @@ const DictionaryName kDictionaries[] = {
     {"DICT_APRILTAG_36h11", cv::aruco::DICT_APRILTAG_36h11},
 };
 
-constexpr int kMaxSquares = 200;
-constexpr double kMaxSizeMm = 10000.0;
+constexpr int kMaxSquares = kMaxTargetSquares;
 constexpr int kTag36h11Codes = 587;
 
 // Field names as the target YAML spells them (docs/targets.md).
@@ -109,10 +108,26 @@ void validate_target(const TargetSpec& s, const std::string& file) {
       fail(squares_field(s), fmt::format("[{}, {}]: more than {} across or down; is this a typo?", s.squares_x,
                                          s.squares_y, kMaxSquares));
   }
-  if (!std::isfinite(s.square_size_mm) || !(s.square_size_mm > 0))
-    fail(size_field(s), fmt::format("must be a positive length in mm, got {}", s.square_size_mm));
-  if (s.square_size_mm > kMaxSizeMm)
-    fail(size_field(s), fmt::format("{} mm is more than {} mm; the unit is mm", s.square_size_mm, kMaxSizeMm));
+  // A length in mm within [kMinTargetLengthMm, kMaxTargetLengthMm].
+  auto length = [&](double value, const std::string& field) {
+    if (!std::isfinite(value) || !(value > 0))
+      fail(field, fmt::format("must be a positive length in mm, got {}", value));
+    if (value < kMinTargetLengthMm)
+      fail(field, fmt::format("{} mm is less than {} mm, the smallest length a target may have", value,
+                              kMinTargetLengthMm));
+    if (value > kMaxTargetLengthMm)
+      fail(field, fmt::format("{} mm is more than {} mm; the unit is mm", value, kMaxTargetLengthMm));
+  };
+  length(s.square_size_mm, size_field(s));
+
+  // The printed pattern, once its lengths are known to be sane.
+  auto pattern = [&]() {
+    const Eigen::Vector2d size = board_size_mm(s);
+    if (size.maxCoeff() > kMaxTargetPatternMm)
+      fail(size_field(s), fmt::format("the pattern would print {:.6g} x {:.6g} mm, more than the {} mm across and "
+                                      "down a target may have (margins excluded)",
+                                      size.x(), size.y(), kMaxTargetPatternMm));
+  };
 
   switch (s.kind) {
     case TargetKind::chessboard:
@@ -124,10 +139,10 @@ void validate_target(const TargetSpec& s, const std::string& file) {
       if (!s.dictionary.empty()) fail("dictionary", "a chessboard has no markers");
       if (s.first_id != 0) fail("first_id", "a chessboard has no markers");
       if (s.charuco_layout != CharucoLayout::opencv) fail("charuco_layout", "applies to charuco boards only");
+      pattern();
       return;
     case TargetKind::charuco: {
-      if (!std::isfinite(s.marker_size_mm) || !(s.marker_size_mm > 0))
-        fail("marker_size_mm", fmt::format("must be a positive length in mm, got {}", s.marker_size_mm));
+      length(s.marker_size_mm, "marker_size_mm");
       if (!(s.marker_size_mm < s.square_size_mm))
         fail("marker_size_mm", fmt::format("{} mm must be smaller than the square ({} mm)", s.marker_size_mm,
                                            s.square_size_mm));
@@ -141,6 +156,7 @@ void validate_target(const TargetSpec& s, const std::string& file) {
         fail("first_id", fmt::format("the board needs {} markers, ids {} to {}, but {} has only ids 0 to {}", n,
                                      s.first_id, static_cast<long long>(s.first_id) + n - 1, s.dictionary,
                                      size - 1));
+      pattern();
       return;
     }
     case TargetKind::aprilgrid: {
@@ -152,8 +168,7 @@ void validate_target(const TargetSpec& s, const std::string& file) {
         fail("tag_spacing_mm", fmt::format("{} mm is narrower than one bit of the tag ({} mm / 8 = {} mm): the tags "
                                            "need a white border that wide",
                                            s.marker_size_mm, s.square_size_mm, s.square_size_mm / 8));
-      if (s.marker_size_mm > kMaxSizeMm)
-        fail("tag_spacing_mm", fmt::format("{} mm is more than {} mm; the unit is mm", s.marker_size_mm, kMaxSizeMm));
+      length(s.marker_size_mm, "tag_spacing_mm");
       if (s.dictionary != "tag36h11")
         fail("dictionary", fmt::format("'{}': an aprilgrid uses tag36h11", s.dictionary));
       if (s.first_id < 0) fail("first_id", fmt::format("must be 0 or more, got {}", s.first_id));
@@ -162,6 +177,7 @@ void validate_target(const TargetSpec& s, const std::string& file) {
         fail("first_id", fmt::format("the grid needs {} tags, ids {} to {}, but tag36h11 has only ids 0 to {}", n,
                                      s.first_id, static_cast<long long>(s.first_id) + n - 1, kTag36h11Codes - 1));
       if (s.charuco_layout != CharucoLayout::opencv) fail("charuco_layout", "applies to charuco boards only");
+      pattern();
       return;
     }
   }

@@ -49,8 +49,18 @@ struct TargetSpec {
 std::string target_kind_name(TargetKind kind);      // "chessboard", "charuco", "aprilgrid"
 std::string charuco_layout_name(CharucoLayout layout);  // "opencv", "legacy"
 
+// The limits of a target spec (validate_target refuses anything beyond them,
+// naming the field and the limit): at most kMaxTargetSquares squares (tags)
+// across and down; every length in mm (square or tag, charuco marker, aprilgrid
+// gap) in [kMinTargetLengthMm, kMaxTargetLengthMm]; the printed pattern
+// (board_size_mm, margins excluded) at most kMaxTargetPatternMm across and down.
+constexpr int kMaxTargetSquares = 200;
+constexpr double kMinTargetLengthMm = 0.01;
+constexpr double kMaxTargetLengthMm = 10000;
+constexpr double kMaxTargetPatternMm = 10000;
+
 // Throws InputError(file, field, problem) naming the first thing that is wrong:
-// too few or too many squares, non-positive or non-finite sizes, a marker not
+// too few or too many squares, non-finite sizes or sizes beyond the limits above, a marker not
 // smaller than its square, an unknown dictionary, ids beyond the dictionary, a
 // chessboard whose 180-degree turn cannot be told apart (equal parity of both
 // square counts), fields set that the kind does not use.

@@ -1,5 +1,7 @@
 // The scene description: packing geometry, the reader on every shipped scene,
 // look-at poses, each validation error, and the JSON Schema against the reader.
+#include <chrono>
+#include <climits>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -580,6 +582,180 @@ TEST_F(SceneText, MeshErrorsNameTheFieldPath) {
     EXPECT_NE(e.problem().find("open.stl"), std::string::npos) << e.what();
     EXPECT_NE(e.problem().find("open meshes are refused"), std::string::npos) << e.what();
   }
+}
+
+
+// ------------------------------------------------------------------ limits
+
+std::string sphere_with(const std::string& centre, const std::string& diameter) {
+  return "solids:\n  - {type: sphere, centre_mm: " + centre + ", diameter_mm: " + diameter + ", material: N-BK7}\n";
+}
+std::string sheet_with(const std::string& extent, const std::string& thickness, const std::string& origin = "[0, 0, 0]") {
+  return "sheet: {origin_mm: " + origin + ", s_axis: [1, 0, 0], t_axis: [0, 1, 0], extent_mm: " + extent +
+         ", thickness_mm: " + thickness + "}\n";
+}
+std::string packing_with(const std::string& layers, const std::string& layer_size, const std::string& diameter = "40",
+                         const std::string& extra = "") {
+  return "packings:\n  - {lattice: bcc, diameter_mm: " + diameter + ", layers: " + layers + ", layer_size: " +
+         layer_size + ", origin_mm: [0, 0, 0], material: N-BK7" + extra + "}\n";
+}
+
+// One limit on every length and coordinate in mm, whatever the element (a
+// sphere of 1e160 mm used to abort the tracer on an assertion).
+TEST_F(SceneText, EveryLengthAndCoordinateIsWithinTheSceneLimits) {
+  expect_error(sphere_with("[0, 0, 0]", "1e160"), "solids[0].diameter_mm", "larger than the 1000000 mm");
+  expect_error(sphere_with("[0, 0, 0]", "1e-4"), "solids[0].diameter_mm", "smaller than the 0.001 mm");
+  expect_error(sphere_with("[0, 2e6, 0]", "4"), "solids[0].centre_mm", "+-1000000 mm");
+  expect_error(sheet_with("[1e308, 10]", "1"), "sheet.extent_mm[0]", "larger than the 1000000 mm");
+  expect_error(sheet_with("[10, 10]", "1e-9"), "sheet.thickness_mm", "smaller than");
+  expect_error(sheet_with("[10, 10]", "1", "[0, 0, -1e300]"), "sheet.origin_mm", "+-1000000 mm");
+  expect_error("solids:\n  - {type: box, centre_mm: [0, 0, 0], size_mm: [1, 1e7, 1], material: PMMA}\n",
+               "solids[0].size_mm[1]", "1000000 mm");
+  expect_error("solids:\n  - {type: box, centre_mm: [1e9, 0, 0], size_mm: [1, 1, 1], material: PMMA}\n",
+               "solids[0].centre_mm", "+-1000000 mm");
+  expect_error("solids:\n  - {type: slab, point_mm: [0, 0, 0], normal: [0, 0, 1], thickness_mm: 1e300, extent_mm: [1, 1], "
+               "material: PMMA}\n",
+               "solids[0].thickness_mm", "1000000 mm");
+  expect_error("solids:\n  - {type: slab, point_mm: [0, 0, 0], normal: [0, 0, 1], thickness_mm: 1, extent_mm: [1, 1e308], "
+               "material: PMMA}\n",
+               "solids[0].extent_mm[1]", "1000000 mm");
+  expect_error("solids:\n  - {type: cylinder, base_centre_mm: [0, 0, 0], axis: [0, 0, 1], radius_mm: 1e-300, length_mm: 2, "
+               "material: PMMA}\n",
+               "solids[0].radius_mm", "smaller than");
+  expect_error("solids:\n  - {type: cylinder, base_centre_mm: [0, 0, 5e6], axis: [0, 0, 1], radius_mm: 1, length_mm: 2, "
+               "material: PMMA}\n",
+               "solids[0].base_centre_mm", "+-1000000 mm");
+  expect_error("solids:\n  - {type: rectangle, centre_mm: [0, 0, 0], size_mm: [2e6, 1], normal: [0, 0, 1], up: [0, 1, 0]}\n",
+               "solids[0].size_mm[0]", "1000000 mm");
+  expect_error(packing_with("1", "[2, 2]", "1e200"), "packings[0].diameter_mm", "1000000 mm");
+  // A packing whose sites run past the limit, though each number alone is fine.
+  expect_error(packing_with("1", "[30000, 1]", "100"), "packings[0]", "+-1000000 mm");
+  expect_error(packing_with("2", "[3, 3]", "40", ", overrides: [{region: {min_mm: [0, 0, 0], max_mm: [1e9, 1, 1]}, "
+                                                   "material: PMMA}]"),
+               "packings[0].overrides[0].region.max_mm", "+-1000000 mm");
+  expect_error("cameras:\n  - name: a\n" + camera_line() + "    pose: {rvec: [0, 0, 0], tvec_mm: [0, 0, 1e300]}\n",
+               "cameras[0].pose", "+-1000000 mm");
+  // At the limits: accepted.
+  EXPECT_NO_THROW((void)load(sphere_with("[0, 0, 1e6]", "1e6")));
+  EXPECT_NO_THROW((void)load(sphere_with("[0, 0, -1e6]", "0.001")));
+}
+
+// A packing is counted before it is expanded: layer_size [1000, 1000] or
+// layers 1e6 used to take minutes and gigabytes before any output.
+TEST_F(SceneText, SolidCountIsLimitedBeforeAnythingIsExpanded) {
+  const auto start = std::chrono::steady_clock::now();
+  expect_error(packing_with("1", "[1000, 1000]"), "packings[0]", "more than the 100000 solids a scene may hold");
+  expect_error(packing_with("1e6", "[1, 1]"), "packings[0]", "100000 solids");
+  expect_error(packing_with("2147483647", "[2147483647, 2147483647]"), "packings[0]", "100000 solids");
+  // Each packing within the limit, together over it.
+  expect_error(packing_with("1", "[300, 300]") + "  - {lattice: sc, diameter_mm: 1, layers: 1, layer_size: [200, 100], "
+                                                  "origin_mm: [0, 0, -100], material: N-BK7}\n",
+               "packings[1]", "with the 90000 solids before it");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+  std::string overrides = ", overrides: [";
+  for (int k = 0; k <= static_cast<int>(kMaxPackingOverrides); ++k) overrides += "{sphere: [0, 0, 0], material: PMMA},";
+  overrides.back() = ']';
+  expect_error(packing_with("1", "[2, 2]", "40", overrides), "packings[0].overrides", "more than the 1000");
+
+  // The count itself, without overflow, and expand_packing refusing on its own.
+  EXPECT_EQ(packing_sphere_count(packing(Lattice::bcc, 3, 4, 5)), 2u * 20 + 12);
+  EXPECT_EQ(packing_sphere_count(packing(Lattice::sc, 3, 4, 5)), 60u);
+  EXPECT_EQ(packing_sphere_count(packing(Lattice::sc, INT_MAX, INT_MAX, INT_MAX)), UINT64_MAX);
+  EXPECT_EQ(packing_sphere_count(packing(Lattice::sc, 0, 4, 5)), 0u);
+  EXPECT_EQ(expand_packing(packing(Lattice::bcc, 3, 4, 5)).size(), 52u);
+  EXPECT_THROW((void)expand_packing(packing(Lattice::sc, 1000, 1000, 1000)), InputError);
+  Scene scene;
+  scene.source = "code";
+  scene.packings.push_back(packing(Lattice::sc, 1, 1000, 1000));
+  try {
+    (void)scene.all_spheres();
+    ADD_FAILURE() << "expanded";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "code");
+    EXPECT_EQ(e.field(), "packings[0]");
+  }
+}
+
+// At the limit, validation (the overlap check included) stays quick.
+TEST(SceneLimits, AFullScaleScenesValidationIsQuick) {
+  Scene scene;
+  scene.packings.push_back(packing(Lattice::bcc, 64, 40, 40, 1));  // 32 * 1600 + 32 * 1521 spheres
+  ASSERT_LE(packing_sphere_count(scene.packings[0]), kMaxSceneSolids);
+  ASSERT_GT(packing_sphere_count(scene.packings[0]), kMaxSceneSolids - 1000);
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_NO_THROW(validate(scene));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+  // As many spheres all in one place: the first overlap ends the search.
+  Scene pile;
+  pile.spheres.resize(kMaxSceneSolids);
+  for (std::size_t k = 0; k < pile.spheres.size(); ++k) {
+    pile.spheres[k].diameter_mm = 1 + 1e-3 * double(k % 7);
+    pile.spheres[k].material = "N-BK7";
+    pile.spheres[k].field = "solids[" + std::to_string(k) + "]";
+  }
+  const auto pile_start = std::chrono::steady_clock::now();
+  try {
+    validate(pile);
+    ADD_FAILURE() << "overlap not found";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "solids[1]");
+    EXPECT_NE(e.problem().find("overlaps solids[0]"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - pile_start).count(), 5.0);
+  // And an overlap is still found, naming the later of the two.
+  SphereSolid extra;
+  extra.centre_mm = packing_sphere_centre(scene.packings[0], 30, 20, 20) + Eigen::Vector3d(0.1, 0, 0);
+  extra.diameter_mm = 1;
+  extra.material = "N-BK7";
+  extra.field = "solids[0]";
+  scene.spheres.push_back(extra);
+  try {
+    validate(scene);
+    ADD_FAILURE() << "overlap not found";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.field().find("packings[0].spheres["), std::string::npos) << e.what();
+    EXPECT_NE(e.problem().find("overlaps solids[0]"), std::string::npos) << e.what();
+  }
+}
+
+// Non-finite or absurd numbers the reader used to take silently.
+TEST_F(SceneText, AbsurdNumbersAreRefusedNamingTheLimit) {
+  expect_error("wavelength_nm: 1e300\n", "wavelength_nm", "[100, 20000] nm");
+  expect_error("wavelength_nm: 1e-300\n", "wavelength_nm", "[100, 20000] nm");
+  expect_error("wavelength_nm: .nan\n", "wavelength_nm", "finite");
+  expect_error("materials:\n  glass: {index: 1e300}\n", "materials.glass.index", "[0.5, 10]");
+  expect_error("materials:\n  glass: {index: 1.5, absorption_per_mm: 1e300}\n", "materials.glass.absorption_per_mm",
+               "[0, 1000000]");
+  expect_error("materials:\n  glass: {index: .inf}\n", "materials.glass.index", "finite");
+  expect_error("background: {radiance: 1e300}\n", "background.radiance", "[0, 1000000]");
+  expect_error("background: {radiance: -.inf}\n", "background.radiance", "finite");
+  std::ofstream(dir_ / "tet.stl") << "solid t\nendsolid t\n";
+  expect_error("meshes:\n  - {file: tet.stl, material: N-BK7, scale: 1e300}\n", "meshes[0].scale",
+               "[1e-06, 1000000]");
+  // A scene built in code is held to the same limits.
+  Scene scene;
+  scene.source = "code";
+  scene.materials["glass"] = material_with_index("glass", 1e300);
+  scene.fluid = "glass";
+  EXPECT_THROW(validate(scene), InputError);
+}
+
+// Any problem with a file the scene names is the scene's, at that field: a
+// name over the system's limit used to escape as an internal error.
+TEST_F(SceneText, FileNamesTheSystemRefusesAreInputErrors) {
+  const std::string long_name(300, 'c');
+  expect_error("cameras:\n  - name: a\n    file: " + long_name + ".yaml\n", "cameras[0].file", "(305 characters)");
+  expect_error("meshes:\n  - {file: " + long_name + ".stl, material: N-BK7}\n", "meshes[0].file", "cannot be used");
+  expect_error("solids:\n  - {type: rectangle, centre_mm: [0, 0, 0], size_mm: [1, 1], normal: [0, 0, 1], up: [0, 1, 0], "
+               "texture: " + long_name + ".png}\n",
+               "solids[0].texture", "cannot be used");
+  fs::create_directories(dir_ / "folder.yaml");
+  expect_error("cameras:\n  - name: a\n    file: folder.yaml\n", "cameras[0].file", "is a folder");
+  expect_error("meshes:\n  - {file: ., material: N-BK7}\n", "meshes[0].file", "is a folder");
+  expect_error("cameras:\n  - name: a\n    file: \"\"\n", "cameras[0].file", "must name a camera file");
+  // A path through a file, not a folder.
+  std::ofstream(dir_ / "plain") << "x";
+  expect_error("cameras:\n  - name: a\n    file: plain/cam.yaml\n", "cameras[0].file", "cam.yaml");
 }
 
 }  // namespace

@@ -133,7 +133,8 @@ TransportMap small_map(const Inputs& in) {
 }
 
 // A real map with the footprint Jacobian filled (by the tracer if it fills
-// it, else with seeded values) and a -0.0 and a NaN to check bit-exactness.
+// it, else with seeded values) and a -0.0 and the smallest denormal to check
+// bit-exactness (a NaN is refused: no traced map holds one).
 TransportMap map_with_footprint(const Inputs& in) {
   TransportMap map = small_map(in);
   std::mt19937 rng(20240611);
@@ -145,7 +146,7 @@ TransportMap map_with_footprint(const Inputs& in) {
     }
   }
   map.ds_dcol[0] = -0.0f;
-  map.dt_drow[1] = std::numeric_limits<float>::quiet_NaN();
+  map.dt_drow[1] = std::numeric_limits<float>::denorm_min();
   // Every statistic distinct and non-zero, so that a swapped or dropped field shows.
   long next = 1000;
   for (long* v : {&map.stats.camera_rays, &map.stats.branches_traced, &map.stats.crossings,
@@ -192,7 +193,7 @@ TEST(TransportMapFile, RoundTripIsBitExact) {
   EXPECT_EQ(read_fp, fp);
   expect_identical(map, back);
   EXPECT_TRUE(std::signbit(back.ds_dcol[0]));
-  EXPECT_TRUE(std::isnan(back.dt_drow[1]));
+  EXPECT_EQ(back.dt_drow[1], std::numeric_limits<float>::denorm_min());
 
   // The size is exactly the documented layout's.
   const std::size_t p = map.pixel_count(), c = map.crossing_count();
@@ -246,6 +247,17 @@ TEST(TransportMapFile, WriterRefusesAnInconsistentMap) {
       {"tag", [](TransportMap& m) { m.tag[3] = 3; }},
       {"samples", [](TransportMap& m) { m.samples_per_axis = 0; }},
       {"width", [](TransportMap& m) { m.width = 0; }},
+      {"NaN s", [](TransportMap& m) { m.s_mm[4] = std::numeric_limits<float>::quiet_NaN(); }},
+      {"infinite t", [](TransportMap& m) { m.t_mm[4] = -std::numeric_limits<float>::infinity(); }},
+      {"negative weight", [](TransportMap& m) { m.weight[2] = -1e-30f; }},
+      {"NaN weight", [](TransportMap& m) { m.weight[2] = std::numeric_limits<float>::quiet_NaN(); }},
+      {"infinite background", [](TransportMap& m) { m.background_weight[7] = std::numeric_limits<float>::infinity(); }},
+      {"negative opaque", [](TransportMap& m) { m.opaque_weight[7] = -0.5f; }},
+      {"NaN Jacobian",
+       [](TransportMap& m) {
+         for (auto* v : {&m.ds_dcol, &m.ds_drow, &m.dt_dcol, &m.dt_drow}) v->assign(m.crossing_count(), 0.f);
+         m.dt_drow.back() = std::numeric_limits<float>::quiet_NaN();
+       }},
   };
   for (const auto& [name, breakage] : breakages) {
     TransportMap bad = good;
@@ -420,6 +432,15 @@ TEST(TransportMapFile, ReadErrorsNameThePathAndTheField) {
   const std::size_t p = map.pixel_count(), c = map.crossing_count();
   const std::size_t tag_at = kHeaderBytes + padded8(4 * (p + 1)) + 3 * padded8(4 * c);
   const std::size_t offsets_at = kHeaderBytes;
+  const std::size_t s_at = kHeaderBytes + padded8(4 * (p + 1)), t_at = s_at + padded8(4 * c),
+                    weight_at = t_at + padded8(4 * c), jacobian_at = tag_at + padded8(c),
+                    background_at = jacobian_at + 4 * padded8(4 * c), opaque_at = background_at + padded8(4 * p);
+  ASSERT_EQ(opaque_at + padded8(4 * p), good.size());
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  auto forge = [](std::string& b, std::size_t at, float v) {
+    poke(b, at, v);
+    reseal(b);
+  };
 
   struct Case {
     std::string name, field;
@@ -466,6 +487,19 @@ TEST(TransportMapFile, ReadErrorsNameThePathAndTheField) {
          b[tag_at + c - 1] = 3;
          reseal(b);
        }},
+      // Forged payloads, their checksum recomputed: values no traced map holds.
+      {"NaN s", "s_mm", [&](std::string& b) { forge(b, s_at + 4 * 5, nan); }},
+      {"infinite t", "t_mm", [&](std::string& b) { forge(b, t_at, -inf); }},
+      {"negative weight", "weight", [&](std::string& b) { forge(b, weight_at + 4 * (c - 1), -0.25f); }},
+      {"infinite weight", "weight", [&](std::string& b) { forge(b, weight_at, inf); }},
+      {"NaN ds_dcol", "ds_dcol", [&](std::string& b) { forge(b, jacobian_at, nan); }},
+      {"infinite ds_drow", "ds_drow", [&](std::string& b) { forge(b, jacobian_at + padded8(4 * c), inf); }},
+      {"NaN dt_dcol", "dt_dcol", [&](std::string& b) { forge(b, jacobian_at + 2 * padded8(4 * c) + 8, nan); }},
+      {"infinite dt_drow", "dt_drow", [&](std::string& b) { forge(b, jacobian_at + 3 * padded8(4 * c) + 4, -inf); }},
+      {"NaN background", "background_weight", [&](std::string& b) { forge(b, background_at + 4 * (p - 1), nan); }},
+      {"negative background", "background_weight", [&](std::string& b) { forge(b, background_at, -1.0f); }},
+      {"infinite opaque", "opaque_weight", [&](std::string& b) { forge(b, opaque_at + 4 * 3, inf); }},
+      {"negative opaque", "opaque_weight", [&](std::string& b) { forge(b, opaque_at, -1e-30f); }},
   };
   for (const Case& k : cases) {
     std::string bytes = good;

@@ -221,6 +221,61 @@ TEST(Validate, RejectsWithTheFieldNamed) {
   expect_input_error([&] { validate_target(s); }, "tags");
 }
 
+// Every length in mm and the printed pattern have limits, stated in the
+// message (a square of 1e-308 mm used to reach an OpenCV assertion when printed).
+TEST(Validate, LengthsAndThePrintedSizeHaveLimits) {
+  auto says = [](const std::string& message, const std::string& words) {
+    EXPECT_NE(message.find(words), std::string::npos) << message;
+  };
+  TargetSpec s = chessboard();
+  s.square_size_mm = 1e-308;
+  says(expect_input_error([&] { validate_target(s, "b.yaml"); }, "square_size_mm", "b.yaml"), "0.01 mm");
+  s.square_size_mm = 1e308;
+  says(expect_input_error([&] { validate_target(s); }, "square_size_mm"), "10000 mm");
+  s.square_size_mm = kMinTargetLengthMm;
+  EXPECT_NO_THROW(validate_target(s));
+
+  s = charuco(11, 8);
+  s.marker_size_mm = 1e-308;
+  says(expect_input_error([&] { validate_target(s); }, "marker_size_mm"), "0.01 mm");
+  s = charuco(11, 8);
+  s.square_size_mm = 0.005;
+  s.marker_size_mm = 0.004;
+  says(expect_input_error([&] { validate_target(s); }, "square_size_mm"), "0.01 mm");
+
+  s = aprilgrid();
+  s.square_size_mm = 1e-308;
+  s.marker_size_mm = 1e-308;
+  says(expect_input_error([&] { validate_target(s); }, "tag_size_mm"), "0.01 mm");
+  s = aprilgrid();
+  s.marker_size_mm = 1e300;
+  says(expect_input_error([&] { validate_target(s); }, "tag_spacing_mm"), "10000 mm");
+  s = aprilgrid();
+  s.marker_size_mm = std::nan("");
+  expect_input_error([&] { validate_target(s); }, "tag_spacing_mm");
+
+  // Each length within its limit, the whole pattern too large.
+  s = chessboard();
+  s.squares_x = 199;
+  s.squares_y = 100;
+  s.square_size_mm = 60;  // 11940 x 6000 mm
+  says(expect_input_error([&] { validate_target(s); }, "square_size_mm"), "more than the 10000 mm");
+  s.square_size_mm = 50;  // 9950 x 5000 mm
+  EXPECT_NO_THROW(validate_target(s));
+  s = aprilgrid();
+  s.squares_x = 100;  // 500 tags, within tag36h11's 587
+  s.square_size_mm = 90;
+  s.marker_size_mm = 27;  // 100 * 90 + 99 * 27 = 11673 mm
+  says(expect_input_error([&] { validate_target(s); }, "tag_size_mm"), "11673");
+
+  // The reader applies the same limits, naming the file.
+  says(expect_input_error([] { parse_target_yaml("glasspiv_target: 1\nkind: chessboard\nsquares: [9, 6]\n"
+                                                 "square_size_mm: 1e-308\n",
+                                                 "spec.yaml"); },
+                          "square_size_mm", "spec.yaml"),
+       "0.01 mm");
+}
+
 TEST(Describe, OneLine) {
   EXPECT_EQ(describe_target(charuco(11, 8)),
             "charuco, 11 x 8 squares of 15 mm, markers 11 mm, DICT_5X5_100, first id 0, opencv layout");
