@@ -1,6 +1,8 @@
 // glasspiv calib intrinsics | report (and detect, registered from calib_detect_command.cpp)
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 
@@ -44,6 +46,36 @@ struct FitCliOptions {
   }
 };
 
+// A number option's check: finite (CLI11's NonNegativeNumber and PositiveNumber
+// let "nan" and "inf" through) and within [min, max]; `zero_too` also admits 0.
+CLI::Validator finite_range(double min, double max, bool zero_too = false) {
+  const std::string range = fmt::format("{}[{:g}, {:g}]", zero_too ? "0 or " : "", min, max);
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (text.empty() || end == text.c_str() || *end != '\0') return "'" + text + "' is not a number";
+        if (!std::isfinite(value)) return "'" + text + "' is not a finite number";
+        if (zero_too && value == 0) return "";
+        if (min > 0 && !(value > 0)) return "'" + text + "' must be above 0 (in " + range + ")";
+        if (!(value >= min && value <= max)) return "'" + text + "' is outside " + range;
+        return "";
+      },
+      "NUMBER in " + range);
+}
+
+// Fit and report errors from calib/fit name no file (the library works on
+// Observations, not files): name the observations (or photos) they came from.
+template <typename F>
+auto naming_file(const std::string& file, F&& work) -> decltype(work()) {
+  try {
+    return work();
+  } catch (const InputError& e) {
+    if (!e.file().empty()) throw;
+    throw InputError(file, e.field(), e.problem());
+  }
+}
+
 void add_fit_options(CLI::App* app, FitCliOptions& o) {
   app->add_option("--lens-model", o.lens_model, "pinhole, opencv4, opencv5, opencv8, opencv12 or opencv14")
       ->check(CLI::IsMember({"pinhole", "opencv4", "opencv5", "opencv8", "opencv12", "opencv14"}))
@@ -52,8 +84,8 @@ void add_fit_options(CLI::App* app, FitCliOptions& o) {
   app->add_flag("--zero-tangential", o.zero_tangential, "Hold p1 = p2 = 0");
   app->add_flag("--fix-principal-point", o.fix_principal_point,
                 "Hold the principal point at the image centre (or the initial camera's)");
-  app->add_option("--outlier-k", o.outlier_k, "Drop corners beyond k sigma and refit; 0 keeps all")
-      ->check(CLI::NonNegativeNumber)
+  app->add_option("--outlier-k", o.outlier_k, "Drop corners beyond k sigma and refit (1 to 1000); 0 keeps all")
+      ->check(finite_range(1, 1000, true))
       ->capture_default_str();
   app->add_option("--initial-camera", o.initial_camera, "Start from this camera file instead of the closed form")
       ->check(CLI::ExistingFile);
@@ -85,9 +117,14 @@ FitOutcome fit_with_diagnostics(const Observations& observations, const Intrinsi
   return out;
 }
 
+// A figure for the user: never "nan" or "inf".
+std::string figure(double value, const char* unit = " px") {
+  return std::isfinite(value) ? fmt::format("{:.4f}{}", value, unit) : std::string("not defined");
+}
+
 void print_fit(const FitOutcome& o) {
   const IntrinsicFit& f = o.fit;
-  std::printf("fit: RMS %.4f px over %d corners (%d outliers dropped), %d views%s; %.2f s\n", f.rms_px,
+  std::printf("fit: RMS %s over %d corners (%d outliers dropped), %d views%s; %.2f s\n", figure(f.rms_px).c_str(),
               f.inlier_count, f.outlier_count, static_cast<int>(f.view_rms_px.size() - f.skipped_views.size()),
               f.skipped_views.empty() ? "" : fmt::format(" ({} skipped)", f.skipped_views.size()).c_str(),
               f.total_time_s);
@@ -96,13 +133,23 @@ void print_fit(const FitOutcome& o) {
               m.cy_px(), fmt::format("{:.6g}", fmt::join(m.distortion(), ", ")).c_str());
   if (f.intrinsics_covariance.size() > 0) {
     const UncertaintyFigures u = uncertainty_figures(f, 1000.0);
-    std::printf("     projection uncertainty (1 sigma): centre %.4f px, worst corner %.4f px\n", u.centre_px,
-                *std::max_element(u.corners_px.begin(), u.corners_px.end()));
+    double worst = -1;
+    int no_ray = 0;
+    for (double c : u.corners_px) {
+      if (std::isfinite(c))
+        worst = std::max(worst, c);
+      else
+        ++no_ray;
+    }
+    std::string corners = worst >= 0 ? figure(worst) : std::string("not defined");
+    if (no_ray > 0) corners += fmt::format(" (the fitted model has no ray at {} of the 4 image corners)", no_ray);
+    std::printf("     projection uncertainty (1 sigma): centre %s, worst corner %s\n", figure(u.centre_px).c_str(),
+                corners.c_str());
   }
   if (o.cross_validation)
-    std::printf("     cross-validation: even vs odd views differ by %.4f px RMS (%.2fx the noise's %.4f px)\n",
-                o.cross_validation->difference.rms_px, o.cross_validation->ratio,
-                o.cross_validation->expected.rms_px);
+    std::printf("     cross-validation: even vs odd views differ by %s RMS (%s the noise's %s)\n",
+                figure(o.cross_validation->difference.rms_px).c_str(), figure(o.cross_validation->ratio, "x").c_str(),
+                figure(o.cross_validation->expected.rms_px).c_str());
   else
     std::printf("     cross-validation: not possible (%s)\n", o.cross_validation_note.c_str());
 }
@@ -115,21 +162,51 @@ struct IntrinsicsOptions {
   FitCliOptions fit;
 };
 
+std::string report_dir_for(const IntrinsicsOptions& o) {
+  if (o.no_report) return "";
+  return o.report_dir.empty() ? fs::path(o.output).replace_extension("").string() + "_report" : o.report_dir;
+}
+
 void run_intrinsics(const IntrinsicsOptions& o) {
+  const bool from_observations = o.inputs.size() == 1 && is_observations_file(o.inputs[0]);
+  std::vector<std::string> photos;
+  if (!from_observations) {
+    if (o.target.empty()) throw InputError("", "--target", "is needed to find the target in photos");
+    photos = expand_photo_inputs(o.inputs);
+  }
+  // No output may replace an input: checked before any detection or fit.
+  {
+    std::vector<std::string> inputs = from_observations ? std::vector<std::string>{o.inputs[0]} : photos;
+    inputs.push_back(o.target);
+    inputs.push_back(o.fit.initial_camera);
+    std::vector<CalibOutput> outputs = {{o.output, "-o"}, {report_dir_for(o), "--report"}};
+    if (!from_observations) {
+      outputs.push_back({o.observations_out, "--observations-out"});
+      outputs.push_back({o.overlay_dir, "--overlay-dir"});
+      for (const std::string& path : overlay_paths(photos, o.overlay_dir)) outputs.push_back({path, "--overlay-dir"});
+    }
+    check_calib_outputs(inputs, outputs);
+  }
+  const CameraFileFormat format = o.to.empty() ? format_for_output_path(o.output) : format_from_name(o.to);
   Observations observations;
-  if (o.inputs.size() == 1 && is_observations_file(o.inputs[0])) {
+  // The file fit errors name: the observations, saved or read, else the photos.
+  std::string source = o.inputs[0];
+  if (from_observations) {
     observations = read_observations(o.inputs[0]);
   } else {
-    if (o.target.empty()) throw InputError("", "--target", "is needed to find the target in photos");
     const TargetSpec spec = read_target_yaml(o.target);
     PhotoDetectionOptions detection;
     detection.overlay_dir = o.overlay_dir;
-    observations = detect_in_photos(expand_photo_inputs(o.inputs), spec, o.target, detection);
-    if (!o.observations_out.empty()) write_observations(o.observations_out, observations);
+    observations = detect_in_photos(photos, spec, o.target, detection);
+    if (!o.observations_out.empty()) {
+      write_observations(o.observations_out, observations);
+      source = o.observations_out;
+    } else if (o.inputs.size() > 1) {
+      source = fmt::format("{} (and {} more photo inputs)", o.inputs[0], o.inputs.size() - 1);
+    }
   }
-  const CameraFileFormat format = o.to.empty() ? format_for_output_path(o.output) : format_from_name(o.to);
   const IntrinsicFitOptions options = o.fit.to_options(observations);
-  const FitOutcome outcome = fit_with_diagnostics(observations, options);
+  const FitOutcome outcome = naming_file(source, [&] { return fit_with_diagnostics(observations, options); });
   print_fit(outcome);
 
   Camera camera{o.name.empty() ? fs::path(o.output).stem().string() : o.name, outcome.fit.camera, std::nullopt,
@@ -138,11 +215,12 @@ void run_intrinsics(const IntrinsicsOptions& o) {
   write_cameras(o.output, {camera}, format);
   std::printf("wrote %s (%s)\n", o.output.c_str(), format_name(format).c_str());
   if (!o.no_report) {
-    const std::string dir = o.report_dir.empty() ? fs::path(o.output).replace_extension("").string() + "_report"
-                                                 : o.report_dir;
-    const CalibrationReportFiles files = write_calibration_report(
-        dir, {observations, options, outcome.fit, outcome.cross_validation ? &*outcome.cross_validation : nullptr,
-              camera.name, camera.pixel_pitch_um, std::nullopt});
+    const std::string dir = report_dir_for(o);
+    const CalibrationReportFiles files = naming_file(source, [&] {
+      return write_calibration_report(
+          dir, {observations, options, outcome.fit, outcome.cross_validation ? &*outcome.cross_validation : nullptr,
+                camera.name, camera.pixel_pitch_um, std::nullopt});
+    });
     std::printf("wrote %s and %s\n", files.html.c_str(), files.metrics_json.c_str());
   }
 }
@@ -154,14 +232,18 @@ struct ReportOptions {
 };
 
 void run_report(const ReportOptions& o) {
+  check_calib_outputs({o.observations, o.fit.initial_camera}, {{o.output_dir, "-o"}});
   const Observations observations = read_observations(o.observations);
   const IntrinsicFitOptions options = o.fit.to_options(observations);
-  const FitOutcome outcome = fit_with_diagnostics(observations, options);
+  const FitOutcome outcome = naming_file(o.observations, [&] { return fit_with_diagnostics(observations, options); });
   print_fit(outcome);
-  const CalibrationReportFiles files = write_calibration_report(
-      o.output_dir, {observations, options, outcome.fit, outcome.cross_validation ? &*outcome.cross_validation : nullptr,
-                     o.name.empty() ? "camera" : o.name,
-                     o.pixel_pitch_um > 0 ? std::optional<double>(o.pixel_pitch_um) : std::nullopt, std::nullopt});
+  const CalibrationReportFiles files = naming_file(o.observations, [&] {
+    return write_calibration_report(
+        o.output_dir,
+        {observations, options, outcome.fit, outcome.cross_validation ? &*outcome.cross_validation : nullptr,
+         o.name.empty() ? "camera" : o.name,
+         o.pixel_pitch_um > 0 ? std::optional<double>(o.pixel_pitch_um) : std::nullopt, std::nullopt});
+  });
   std::printf("wrote %s and %s\n", files.html.c_str(), files.metrics_json.c_str());
 }
 
@@ -185,8 +267,8 @@ void register_calib_commands(CLI::App& app) {
   i->add_option("--observations-out", in->observations_out, "Also save the detected observations (.yaml/.json)");
   i->add_option("--overlay-dir", in->overlay_dir, "Write each photo with its detected corners as PNG here");
   i->add_option("--name", in->name, "Camera name (default: the output file's stem)");
-  i->add_option("--pixel-pitch-um", in->pixel_pitch_um, "Sensor pixel size in um (for DaVis output)")
-      ->check(CLI::PositiveNumber);
+  i->add_option("--pixel-pitch-um", in->pixel_pitch_um, "Sensor pixel size in um (for DaVis output; 0.1 to 1000)")
+      ->check(finite_range(0.1, 1000));
   add_fit_options(i, in->fit);
   i->callback([in] { run_intrinsics(*in); });
 
@@ -197,7 +279,8 @@ void register_calib_commands(CLI::App& app) {
       ->check(CLI::ExistingFile);
   r->add_option("-o,--output", rep->output_dir, "Report folder")->required();
   r->add_option("--name", rep->name, "Camera name shown in the report");
-  r->add_option("--pixel-pitch-um", rep->pixel_pitch_um, "Sensor pixel size in um")->check(CLI::PositiveNumber);
+  r->add_option("--pixel-pitch-um", rep->pixel_pitch_um, "Sensor pixel size in um (0.1 to 1000)")
+      ->check(finite_range(0.1, 1000));
   add_fit_options(r, rep->fit);
   r->callback([rep] { run_report(*rep); });
 }

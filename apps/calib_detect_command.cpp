@@ -32,12 +32,12 @@ void run_detect(const DetectCommandOptions& o) {
                      fmt::format("mrcal's corners.vnl holds a regular grid of corners; a {}'s are not one",
                                  target_kind_name(spec.kind)));
   const std::vector<std::string> photos = expand_photo_inputs(o.images);
-  for (const std::string& image : photos)
-    for (const std::string& out : {o.output, o.vnl}) {
-      std::error_code ec;
-      if (!out.empty() && fs::exists(out, ec) && fs::equivalent(image, out, ec))
-        throw InputError(out, "", "is an input image; glasspiv never overwrites its inputs");
-    }
+  // No output may replace an input (a photo or the target spec): before any detection.
+  std::vector<std::string> inputs = photos;
+  inputs.push_back(o.target);
+  std::vector<CalibOutput> outputs = {{o.output, "-o"}, {o.vnl, "--vnl"}, {o.detection.overlay_dir, "--overlay-dir"}};
+  for (const std::string& path : overlay_paths(photos, o.detection.overlay_dir)) outputs.push_back({path, "--overlay-dir"});
+  check_calib_outputs(inputs, outputs);
   const Observations observations = detect_in_photos(photos, spec, o.target, o.detection);
   write_observations(o.output, observations);
   std::size_t views = 0;

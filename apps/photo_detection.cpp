@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <unistd.h>
 
+#include "apps/cli_files.h"
 #include "targets/photo_io.h"
 #include "targets/target_detect.h"
 #include "util/atomic_file.h"
@@ -76,6 +77,36 @@ std::vector<std::string> expand_photo_inputs(const std::vector<std::string>& inp
   return photos;
 }
 
+std::vector<std::string> overlay_paths(const std::vector<std::string>& photos, const std::string& overlay_dir) {
+  std::vector<std::string> out;
+  if (overlay_dir.empty()) return out;
+  std::set<std::string> names;
+  for (const std::string& path : photos) {
+    const std::string stem = fs::path(path).stem().string();
+    std::string name = stem + "_corners";
+    for (int k = 2; names.count(name); ++k) name = stem + "_corners_" + std::to_string(k);
+    names.insert(name);
+    out.push_back((fs::path(overlay_dir) / (name + ".png")).string());
+  }
+  return out;
+}
+
+void check_calib_outputs(const std::vector<std::string>& inputs, const std::vector<CalibOutput>& outputs) {
+  for (const CalibOutput& out : outputs) {
+    if (out.path.empty()) continue;
+    for (const std::string& in : inputs) {
+      if (in.empty()) continue;
+      try {
+        check_not_input(in, out.path);
+      } catch (const InputError&) {
+        throw InputError(out.path, out.option,
+                         in == out.path ? "is an input of this command; glasspiv never overwrites its inputs"
+                                        : "is the input '" + in + "'; glasspiv never overwrites its inputs");
+      }
+    }
+  }
+}
+
 Observations detect_in_photos(const std::vector<std::string>& photos, const TargetSpec& spec,
                               const std::string& target_path, const PhotoDetectionOptions& options) {
   DetectOptions detect_options;
@@ -86,8 +117,16 @@ Observations detect_in_photos(const std::vector<std::string>& photos, const Targ
   observations.target_name = spec.name;
   std::string first_photo;
   std::map<std::string, int> notes;
-  std::set<std::string> overlay_names;
   const std::size_t total_corners = board_corner_count(spec);
+  // An overlay must not replace a photo or the spec (a photo named x_corners.png
+  // inside the overlay folder): checked before the first detection.
+  const std::vector<std::string> overlays = overlay_paths(photos, options.overlay_dir);
+  std::vector<std::string> inputs = photos;
+  inputs.push_back(target_path);
+  std::vector<CalibOutput> overlay_outputs;
+  for (const std::string& path : overlays) overlay_outputs.push_back({path, "--overlay-dir"});
+  check_calib_outputs(inputs, overlay_outputs);
+  std::size_t photo_index = 0;
   ProgressBar bar("detecting", photos.size());
   for (const std::string& path : photos) {
     const cv::Mat gray = read_photo_gray8(path);
@@ -114,16 +153,13 @@ Observations detect_in_photos(const std::vector<std::string>& photos, const Targ
                              r.note.empty() ? "" : " (" + r.note + ")"));
     }
     if (!options.overlay_dir.empty()) {
-      const std::string stem = fs::path(path).stem().string();
-      std::string name = stem + "_corners";
-      for (int k = 2; overlay_names.count(name); ++k) name = stem + "_corners_" + std::to_string(k);
-      overlay_names.insert(name);
-      const std::string out = (fs::path(options.overlay_dir) / (name + ".png")).string();
+      const std::string& out = overlays[photo_index];
       const cv::Mat picture = overlay(gray, r.view);
       write_file_atomically_with(out, [&](const std::string& temporary) {
         if (!cv::imwrite(temporary, picture)) throw InputError(out, "", "cannot write the overlay PNG");
       });
     }
+    ++photo_index;
     bar.advance();
   }
   bar.finish();

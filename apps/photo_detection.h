@@ -22,6 +22,22 @@ struct PhotoDetectionOptions {
 // folder without images.
 std::vector<std::string> expand_photo_inputs(const std::vector<std::string>& inputs);
 
+// The overlay PNG detect_in_photos writes for each photo (photos order) into
+// `overlay_dir`: <stem>_corners.png, numbered _2, _3 ... for repeated stems.
+// Empty when overlay_dir is "".
+std::vector<std::string> overlay_paths(const std::vector<std::string>& photos, const std::string& overlay_dir);
+
+// A file or folder a calib command writes, and the option that names it.
+struct CalibOutput {
+  std::string path;
+  std::string option;  // "-o", "--report", "--overlay-dir", ...
+};
+
+// Before any detection or fit: InputError(output, option, ...) if an output is
+// one of the inputs (by filesystem identity, apps/cli_files.h check_not_input):
+// glasspiv never overwrites its inputs. Empty paths are skipped.
+void check_calib_outputs(const std::vector<std::string>& inputs, const std::vector<CalibOutput>& outputs);
+
 // Detects `spec` in every photo. `target_path` names the spec in errors.
 // Throws InputError for an unreadable photo (naming it), photos of different
 // sizes (naming the file and both sizes), or a target found in none of them.

@@ -5,11 +5,13 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <thread>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
+#include <glog/logging.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
@@ -24,6 +26,35 @@ std::string format_number(const char* format, double value) {
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, format, value);
   return buffer;
+}
+
+// Ceres logs through glog (warnings such as "Linear solver failure", errors
+// such as "Residual and Jacobian evaluation failed", and glog's own "Logging
+// before InitGoogleLogging" line) straight to stderr; the fit reports through
+// its result and InputError only. Only FATAL (a crash anyway) stays.
+void silence_ceres_logging() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    FLAGS_minloglevel = std::max<int>(FLAGS_minloglevel, google::GLOG_FATAL);
+    FLAGS_stderrthreshold = std::max<int>(FLAGS_stderrthreshold, google::GLOG_FATAL);
+    FLAGS_logtostderr = false;
+    FLAGS_alsologtostderr = false;
+  });
+}
+
+// "0-12", "1, 4, 7-9": view indices, ascending, runs compressed.
+std::string view_list(std::vector<int> views) {
+  std::sort(views.begin(), views.end());
+  std::string out;
+  for (std::size_t i = 0; i < views.size();) {
+    std::size_t j = i;
+    while (j + 1 < views.size() && views[j + 1] == views[j] + 1) ++j;
+    if (!out.empty()) out += ", ";
+    out += std::to_string(views[i]);
+    if (j > i) out += "-" + std::to_string(views[j]);
+    i = j + 1;
+  }
+  return out;
 }
 
 // One corner that takes part in the fit.
@@ -44,6 +75,52 @@ struct UsedView {
   std::array<double, kPoseParameterCount> pose{};  // angle-axis, translation mm
   bool active = true;                              // false once outlier rejection emptied it
 };
+
+// How far apart two views' board poses are, in pixels: the RMS distance between
+// where their homographies put the same board points (each view's own corners,
+// the larger of the two). Two photos of an unmoved board give the detector's
+// noise; a copied view gives round-off.
+double homography_distance_px(const UsedView& a, const UsedView& b, const Observations& observations) {
+  const auto rms_over = [&](const UsedView& corners_of) {
+    double sum = 0;
+    int n = 0;
+    for (const CornerObservation& c : observations.views[corners_of.view].corners) {
+      const cv::Vec3d p(c.board_point_mm.x(), c.board_point_mm.y(), 1.0);
+      const cv::Vec3d qa = a.homography * p, qb = b.homography * p;
+      const double dx = qa[0] / qa[2] - qb[0] / qb[2], dy = qa[1] / qa[2] - qb[1] / qb[2];
+      sum += dx * dx + dy * dy;
+      ++n;
+    }
+    return n > 0 ? std::sqrt(sum / n) : std::numeric_limits<double>::infinity();
+  };
+  const double d = std::max(rms_over(a), rms_over(b));
+  return std::isfinite(d) ? d : std::numeric_limits<double>::infinity();
+}
+
+// Views grouped by board pose: a view joins the first group whose first view is
+// within kSamePoseRmsPx (homography_distance_px). `spread_px` gets, per group,
+// the largest distance of a member to the group's first view.
+std::vector<std::vector<int>> same_pose_groups(const std::vector<UsedView>& views, const Observations& observations,
+                                               std::vector<double>* spread_px) {
+  std::vector<std::vector<int>> groups;  // indices into views
+  spread_px->clear();
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    bool placed = false;
+    for (std::size_t g = 0; g < groups.size() && !placed; ++g) {
+      const double d = homography_distance_px(views[groups[g][0]], views[i], observations);
+      if (d < kSamePoseRmsPx) {
+        groups[g].push_back(static_cast<int>(i));
+        (*spread_px)[g] = std::max((*spread_px)[g], d);
+        placed = true;
+      }
+    }
+    if (!placed) {
+      groups.push_back({static_cast<int>(i)});
+      spread_px->push_back(0);
+    }
+  }
+  return groups;
+}
 
 void validate(const Observations& observations) {
   if (observations.image_width_px <= 0 || observations.image_height_px <= 0)
@@ -132,8 +209,11 @@ MarginalCovariance marginal_intrinsics_covariance(ceres::Problem& problem, doubl
     }
   evaluate.num_threads = num_threads;
   ceres::CRSMatrix jacobian;
-  problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian);
+  MarginalCovariance out;
+  // Fails when a corner lies behind the camera at the fitted poses.
+  if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian)) return out;
   const int m = jacobian.num_cols - kPoseParameterCount * active;
+  if (m <= 0 || jacobian.num_rows != static_cast<int>(jacobian.rows.size()) - 1) return out;
 
   Eigen::MatrixXd s = Eigen::MatrixXd::Zero(m, m);
   int row = 0;
@@ -158,8 +238,7 @@ MarginalCovariance marginal_intrinsics_covariance(ceres::Problem& problem, doubl
   const Eigen::MatrixXd scaled = d.asDiagonal() * s * d.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
   const Eigen::VectorXd lambda = eigen.eigenvalues();
-  MarginalCovariance out;
-  if (!(lambda.allFinite() && lambda(m - 1) > 0)) return out;
+  if (!(scaled.allFinite() && lambda.allFinite() && lambda(m - 1) > 0)) return out;
   out.reciprocal_condition = std::max(0.0, lambda(0) / lambda(m - 1));
   int undetermined = 0;
   while (undetermined < m && lambda(undetermined) < kMinReciprocalCondition * lambda(m - 1)) ++undetermined;
@@ -168,14 +247,26 @@ MarginalCovariance marginal_intrinsics_covariance(ceres::Problem& problem, doubl
   inverse_lambda.head(undetermined).setZero();
   const Eigen::MatrixXd inverse = eigen.eigenvectors() * inverse_lambda.asDiagonal() * eigen.eigenvectors().transpose();
   out.covariance = sigma_px * sigma_px * d.asDiagonal() * inverse * d.asDiagonal();
+  if (!out.covariance.allFinite() || (out.covariance.diagonal().array() < 0).any()) out.covariance.resize(0, 0);
   return out;
 }
+
+// Beyond this fit RMS the corners are not one board seen by one camera (a
+// detector is off by a fraction of a pixel, a lens model by a few pixels).
+constexpr double kInconsistentRmsPx = 10;
 
 [[noreturn]] void throw_unobservable(const std::string& detail, const IntrinsicFit& fit, int views) {
   std::string problem = "the focal length is not determined by these views (" + detail + "; fit RMS " +
                         format_number("%.3g", fit.rms_px) + " px";
   if (fit.termination != "CONVERGENCE") problem += ", the solver stopped with " + fit.termination;
-  problem += "): views are nearly fronto-parallel: tilt the board by 20-40 degrees in some views";
+  if (fit.rms_px > kInconsistentRmsPx)
+    throw InputError("", "views",
+                     problem + "): the corners do not fit one board seen by one camera (RMS above " +
+                         format_number("%g", kInconsistentRmsPx) +
+                         " px): check the corner ids, the board points and the target spec");
+  problem +=
+      "): views are nearly fronto-parallel, or all tilted alike: tilt the board by 20-40 degrees in some views, "
+      "in different directions";
   if (views < 5) problem += ", and use more views (" + std::to_string(views) + " used)";
   if (fit.termination != "CONVERGENCE")
     problem += "; if they are tilted, the lens model or the held parameters may not suit the lens";
@@ -192,6 +283,7 @@ std::string intrinsic_name(int index) {
 
 IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFitOptions& options) {
   const Stopwatch clock;
+  silence_ceres_logging();
   validate(observations);
   const int width = observations.image_width_px, height = observations.image_height_px;
   const int distortion_count = static_cast<int>(options.lens_model);
@@ -306,6 +398,24 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
     views = std::move(posed);
   }
   check_view_count(views.size(), " with a board pose");
+
+  // --- Views of one board pose (a photo copied, or the board not moved) count
+  // once: repeating a view adds no geometry, only false confidence (13 copies of
+  // one view fit a focal length 75% off with a 1-sigma of 3%).
+  std::vector<double> group_spread_px;
+  const std::vector<std::vector<int>> pose_groups = same_pose_groups(views, observations, &group_spread_px);
+  const int distinct_views = static_cast<int>(pose_groups.size());
+  if (distinct_views == 1 && !options.fix_principal_point) {
+    std::vector<int> members;
+    for (int i : pose_groups[0]) members.push_back(views[i].view);
+    throw InputError("", "views",
+                     "views " + view_list(members) + " are one board pose (their homographies agree to " +
+                         format_number("%.1e", group_spread_px[0]) + " px RMS, below " +
+                         format_number("%g", kSamePoseRmsPx) +
+                         " px): 1 distinct view, and with a free principal point one view cannot determine the "
+                         "focal length; move and tilt the board by 20-40 degrees between photos (10 or more "
+                         "distinct views), or fix the principal point");
+  }
   std::sort(skipped.begin(), skipped.end(), [](const SkippedView& a, const SkippedView& b) { return a.view < b.view; });
 
   // --- The problem.
@@ -395,13 +505,21 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
   solver_options.minimizer_progress_to_stdout = false;
 
   IntrinsicFit fit(CameraModel(width, height, 1, 1, 0, 0));
+  fit.distinct_views = distinct_views;
   update_residuals();
   fit.initial_rms_px = inlier_rms();
 
   const auto add_summary = [&](const ceres::Solver::Summary& summary) {
-    fit.iterations += static_cast<int>(summary.iterations.size()) - 1;
+    fit.iterations += std::max(0, static_cast<int>(summary.iterations.size()) - 1);
     fit.solver_time_s += summary.total_time_in_seconds;
     fit.termination = ceres::TerminationTypeToString(summary.termination_type);
+    // FAILURE: the cost could not be evaluated (corners behind the camera at
+    // the start) or the linear solver failed for good; the parameters are not a fit.
+    if (summary.termination_type == ceres::FAILURE)
+      throw InputError("", "views",
+                       "the solver failed (" + summary.message +
+                           "): the corners do not fit one board seen by one camera; check the corner ids, the "
+                           "board points and the target spec");
   };
 
   // --- Rational, thin-prism and tilt models: first converge with only k1 k2 p1
@@ -514,13 +632,17 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
       marginal_intrinsics_covariance(problem, intrinsics.data(), views, corners, check_sigma, threads);
   fit.reciprocal_condition = check.reciprocal_condition;
   if (check.covariance.size() == 0)
-    throw_unobservable("the normal equations of the intrinsics are zero or not finite", fit, active_views);
+    throw_unobservable("the normal equations of the intrinsics are zero, not finite or not evaluable", fit,
+                       active_views);
   if (check.undetermined.cols() > 0) {
     const std::string condition = "reciprocal condition " + format_number("%.1e", check.reciprocal_condition);
     // Does the undetermined subspace contain the focal length?
     double focal_share = check.undetermined.row(0).squaredNorm();
     if (free_intrinsics.size() > 1 && free_intrinsics[1] == 1) focal_share += check.undetermined.row(1).squaredNorm();
-    if (focal_share > 0.1) throw_unobservable("the normal equations are singular, " + condition, fit, active_views);
+    if (focal_share > 0.1)
+      throw_unobservable("the normal equations are singular, " + condition + " < " +
+                             format_number("%.0e", kMinReciprocalCondition),
+                         fit, active_views);
     // Otherwise a trade-off among distortion coefficients (a rational model on
     // a lens that does not need it): keep the fit, name them.
     for (int i = 0; i < check.undetermined.rows(); ++i)
@@ -530,7 +652,9 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
   fit.fx_sigma_px = std::sqrt(check.covariance(0, 0));  // fx is always the first free intrinsic
   if (!(fit.fx_sigma_px <= kMaxRelativeFocalSigma * intrinsics[0]))
     throw_unobservable("1-sigma of fx = " + format_number("%.3g", 100 * fit.fx_sigma_px / intrinsics[0]) +
-                           "% of fx at " + format_number("%.3g", check_sigma) + " px noise",
+                           "% of fx > " + format_number("%g", 100 * kMaxRelativeFocalSigma) + "% at " +
+                           format_number("%.3g", check_sigma) + " px noise; reciprocal condition " +
+                           format_number("%.1e", check.reciprocal_condition),
                        fit, active_views);
 
   // --- Covariance of the free intrinsics: the same Schur complement at the

@@ -78,6 +78,9 @@ struct IntrinsicFit {
   std::vector<RigidTransform> camera_from_board;
   std::vector<double> view_rms_px;  // per input view over its inliers; NaN for skipped views
   std::vector<SkippedView> skipped_views;
+  // Board poses among the used views: views whose homographies agree to within
+  // kSamePoseRmsPx count once (a copied photo, an unmoved board).
+  int distinct_views = 0;
   // Every corner of every used view, outliers included (flagged), in input order.
   std::vector<ObservationResidual> residuals;
   int inlier_count = 0, outlier_count = 0;
@@ -146,6 +149,10 @@ constexpr double kMinReciprocalCondition = 1e-13;
 // The observability check uses max(sigma_px, this): noise-free data must not
 // make a degenerate set of views look determined.
 constexpr double kObservabilitySigmaFloorPx = 0.05;
+// Two views are one board pose when their homographies put the board's corners
+// within this RMS distance of each other (px). The views are then counted once:
+// with a free principal point, a single distinct pose is refused (field "views").
+constexpr double kSamePoseRmsPx = 0.5;
 
 IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFitOptions& options = {});
 

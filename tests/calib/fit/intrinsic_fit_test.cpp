@@ -481,6 +481,109 @@ TEST(IntrinsicFit, LongFocalLength) {
   }
 }
 
+// The case: one view copied 13 times gave a focal length 75% off with a
+// 1-sigma of 3% (repetition fakes confidence). A single board pose must be
+// refused with the figure that shows it, copied exactly or re-observed with
+// fresh detector noise; a good set with a few copies stays accepted.
+TEST(IntrinsicFit, IdenticalViewsAreRefused) {
+  const CameraModel truth = truth_opencv5();
+  std::mt19937 rng(31);
+  const std::vector<RigidTransform> poses = plan_views(truth, {}, {}, rng);
+  const Observations one = observe(truth, {}, {poses[0]}, kNoisePx, rng);
+  Observations copies = one;
+  for (int i = 1; i < 13; ++i) copies.views.push_back(one.views[0]);
+  try {
+    fit_intrinsics(copies);
+    FAIL() << "13 copies of one view were accepted";
+  } catch (const InputError& e) {
+    std::cout << "13 identical views: " << e.what() << "\n";
+    EXPECT_EQ(e.field(), "views");
+    EXPECT_NE(e.problem().find("views 0-12 are one board pose"), std::string::npos) << e.problem();
+    EXPECT_NE(e.problem().find("1 distinct view"), std::string::npos) << e.problem();
+    EXPECT_EQ(e.problem().find("nan"), std::string::npos) << e.problem();
+  }
+  // The same pose photographed 13 times: independent 0.1 px noise each time.
+  const Observations rephotographed = observe(truth, {}, std::vector<RigidTransform>(13, poses[0]), kNoisePx, rng);
+  try {
+    fit_intrinsics(rephotographed);
+    FAIL() << "13 photos of one board pose were accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.problem().find("views 0-12 are one board pose"), std::string::npos) << e.problem();
+  }
+  // A good set with two copies of view 3 appended: accepted, 20 distinct views.
+  Observations good = observe(truth, {}, poses, kNoisePx, rng);
+  good.views.push_back(good.views[3]);
+  good.views.push_back(good.views[3]);
+  const IntrinsicFit fit = fit_intrinsics(good);
+  expect_finite(fit);
+  EXPECT_EQ(fit.distinct_views, 20);
+  EXPECT_LT(aligned_difference(truth, fit.camera).rms_px, 0.1);
+}
+
+// All boards parallel (one orientation, moved about the image): for a pinhole
+// camera Zhang's constraints repeat (H = K [r1 r2 t], only t changes) and the
+// focal length is undetermined with a free principal point: refused. Through a
+// lens with distortion the distortion centre pins the principal point, and the
+// same views determine the focal length: accepted, and right.
+TEST(IntrinsicFit, ParallelBoards) {
+  const CameraModel truth = truth_opencv5();
+  const CameraModel pinhole(2048, 1536, 2400, 2401.5, 1030.25, 760.75);
+  std::mt19937 rng(32);
+  std::vector<RigidTransform> poses = plan_views(truth, {}, {}, rng);
+  for (RigidTransform& pose : poses) {
+    const Eigen::Vector3d centre = pose.apply(SyntheticBoard{}.centre());
+    pose.rotation = poses[0].rotation;
+    pose.translation_mm = centre - pose.rotation * SyntheticBoard{}.centre();
+  }
+  IntrinsicFitOptions options;
+  options.lens_model = LensModel::Pinhole;
+  try {
+    const IntrinsicFit fit = fit_intrinsics(observe(pinhole, {}, poses, kNoisePx, rng), options);
+    FAIL() << "parallel boards accepted for a pinhole model: fx " << fit.camera.fx_px() << " (truth "
+           << pinhole.fx_px() << "), 1-sigma " << fit.fx_sigma_px << ", reciprocal condition "
+           << fit.reciprocal_condition;
+  } catch (const InputError& e) {
+    std::cout << "parallel boards, pinhole: " << e.what() << "\n";
+    EXPECT_EQ(e.field(), "views");
+    EXPECT_NE(e.problem().find("reciprocal condition"), std::string::npos) << e.problem();
+    EXPECT_EQ(e.problem().find("nan"), std::string::npos) << e.problem();
+  }
+  const IntrinsicFit fit = fit_intrinsics(observe(truth, {}, poses, kNoisePx, rng));
+  EXPECT_LT(std::abs(fit.camera.fx_px() - truth.fx_px()), 5 * fit.fx_sigma_px);
+  EXPECT_LT(fit.fx_sigma_px, 0.01 * truth.fx_px());
+}
+
+// Corners that fit no camera (half of each view mirrored through the image
+// centre, or random pixels): an InputError naming the field, and not one line
+// of Ceres' or glog's logging on stderr (the solver fails on these).
+TEST(IntrinsicFit, InconsistentCornersAreRefusedSilently) {
+  const CameraModel truth = truth_opencv5();
+  Observations mirrored = make_views(truth, {}, kNoisePx, 33);
+  for (ViewObservations& v : mirrored.views)
+    for (CornerObservation& c : v.corners)
+      if (c.id % 2 == 0) c.pixel_px = Eigen::Vector2d(2047, 1535) - c.pixel_px;
+  Observations random = make_views(truth, {}, kNoisePx, 34);
+  std::mt19937 rng(35);
+  std::uniform_real_distribution<double> x(0, 2047), y(0, 1535);
+  for (ViewObservations& v : random.views)
+    for (CornerObservation& c : v.corners) c.pixel_px = Eigen::Vector2d(x(rng), y(rng));
+  for (const Observations* obs : {&mirrored, &random}) {
+    ::testing::internal::CaptureStderr();
+    std::string problem;
+    try {
+      fit_intrinsics(*obs);
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "views");
+      problem = e.problem();
+    }
+    const std::string logged = ::testing::internal::GetCapturedStderr();
+    std::cout << "inconsistent corners: " << problem << "\n";
+    EXPECT_FALSE(problem.empty()) << "accepted";
+    EXPECT_EQ(problem.find("nan"), std::string::npos) << problem;
+    EXPECT_EQ(logged, "") << "Ceres/glog wrote to stderr";
+  }
+}
+
 TEST(IntrinsicFit, NonPlanarBoardAndBadOptionsAreInputErrors) {
   Observations obs = make_views(truth_opencv5(), {}, kNoisePx, 13);
   IntrinsicFitOptions bad;
