@@ -101,20 +101,50 @@ void sort_by_id(std::vector<CornerObservation>& corners) {
 
 // ---------------------------------------------------------------- chessboard
 
+// One attempt at finding a chessboard: which OpenCV finder, with which flags.
+struct ChessboardAttempt {
+  bool sector_based;
+  int flags;
+};
+
+// The attempts, in order; the first to find the board wins. OpenCV's finders
+// only report a board of exactly the pattern's size, and the sector-based one's
+// outcome is not monotonic in its flags. CALIB_CB_EXHAUSTIVE raises its key
+// points from 100 to 1000 (and its seeds from 30 to 100); the weak points it
+// adds can include points along the board's outer edge, where the outer squares
+// meet a narrow margin and a dark frame (made more contrasty by
+// CALIB_CB_NORMALIZE_IMAGE's histogram equalisation). Every seed's board then
+// grows by that spurious row, is larger than the pattern and is thrown away:
+// OpenCV's right09.jpg, whose board with CALIB_CB_LARGER added comes out 9 x 7
+// for 9 x 6, the extra row on the edge; without either CALIB_CB_EXHAUSTIVE or
+// the equalisation it is found. So a miss is retried without
+// CALIB_CB_EXHAUSTIVE, then by the classic finder, another algorithm.
+std::vector<ChessboardAttempt> chessboard_attempts(DetectOptions::ChessboardMethod method) {
+  const ChessboardAttempt sb_exhaustive{
+      true, cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY};
+  const ChessboardAttempt sb{true, cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_ACCURACY};
+  const ChessboardAttempt classic{
+      false, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK};
+  if (method == DetectOptions::ChessboardMethod::sector_based) return {sb_exhaustive, sb, classic};
+  return {classic, sb_exhaustive, sb};
+}
+
 std::vector<cv::Point2f> find_chessboard(const cv::Mat& gray, const TargetSpec& spec,
                                          DetectOptions::ChessboardMethod method) {
   const cv::Size pattern(spec.squares_x - 1, spec.squares_y - 1);
   std::vector<cv::Point2f> corners;
-  if (method == DetectOptions::ChessboardMethod::sector_based) {
-    const int flags = cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY;
-    if (!cv::findChessboardCornersSB(gray, pattern, corners, flags)) return {};
-  } else {
-    const int flags = cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
-    if (!cv::findChessboardCorners(gray, pattern, corners, flags)) return {};
+  bool found = false;
+  for (const ChessboardAttempt& attempt : chessboard_attempts(method)) {
+    corners.clear();
+    found = attempt.sector_based ? cv::findChessboardCornersSB(gray, pattern, corners, attempt.flags)
+                                 : cv::findChessboardCorners(gray, pattern, corners, attempt.flags);
+    if (found && corners.size() == static_cast<std::size_t>(pattern.area())) break;
+    found = false;
   }
-  // Both finders' corners are refined by cornerSubPix: an 11 x 11 window, smaller
-  // where the squares are too small for it (it must not reach the neighbouring
-  // corners).
+  if (!found) return {};
+  // Whichever finder found them, the corners are refined by cornerSubPix: an
+  // 11 x 11 window, smaller where the squares are too small for it (it must not
+  // reach the neighbouring corners).
   double spacing = 1e30;
   for (int r = 0; r < pattern.height; ++r)
     for (int c = 0; c + 1 < pattern.width; ++c)

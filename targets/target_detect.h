@@ -14,10 +14,15 @@
 namespace glasspiv {
 
 struct DetectOptions {
-  // Chessboards: how the board is found, by OpenCV's sector-based detector
-  // (findChessboardCornersSB with CALIB_CB_ACCURACY; the default: it copes with
-  // blur and uneven light better) or the classic findChessboardCorners. Either
-  // way the corners are then refined by cornerSubPix (11 x 11 window, or less
+  // Chessboards: how the board is found first, by OpenCV's sector-based
+  // detector (findChessboardCornersSB with CALIB_CB_NORMALIZE_IMAGE | EXHAUSTIVE |
+  // ACCURACY; the default: it copes with blur and uneven light better) or the
+  // classic findChessboardCorners (ADAPTIVE_THRESH | NORMALIZE_IMAGE |
+  // FAST_CHECK). A miss is retried: sector_based then tries
+  // findChessboardCornersSB without EXHAUSTIVE (which can lose a board to a
+  // spurious row of corners along its edge; OpenCV's right09.jpg) and then the
+  // classic finder; classic tries the two sector-based calls. Whichever finds
+  // it, the corners are then refined by cornerSubPix (11 x 11 window, or less
   // for small squares; 30 iterations / 1e-3 px). Measured on synthetic photos
   // (tests/targets/target_detect_test.cpp): sector-based alone RMS 0.09 px,
   // either with cornerSubPix 0.034 px.
