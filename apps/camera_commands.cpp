@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "apps/camera_text.h"
+#include "apps/cli_checks.h"
 #include "apps/cli_files.h"
 #include "apps/commands.h"
 #include "apps/plots.h"
@@ -31,8 +32,15 @@ struct CompareOptions {
   bool use_poses = false;
 };
 
+// --plot: a PNG, not the camera file or another input, refused before any work.
+void check_plot(const std::vector<std::string>& inputs, const std::string& plot) {
+  if (plot.empty()) return;
+  if (lower_extension(plot) != ".png") throw InputError(plot, "--plot", "must end in .png (plots are PNG pictures)");
+  check_outputs(inputs, {{plot, "--plot"}});
+}
+
 void run_convert(const ConvertOptions& o) {
-  check_not_input(o.input, o.output);
+  check_outputs({o.input}, {{o.output, "output"}});
   Camera camera = read_camera(o.input, o.camera);
   if (o.pixel_pitch_um != 0) {
     if (!(o.pixel_pitch_um > 0)) throw InputError("", "--pixel-pitch-um", "must be positive");
@@ -46,7 +54,9 @@ void run_convert(const ConvertOptions& o) {
 }
 
 void run_show(const ShowOptions& o) {
+  check_plot({o.input}, o.plot);
   Camera camera = read_camera(o.input, o.camera);
+  check_sample_grid("--step-px", camera.model.width_px(), camera.model.height_px(), o.step_px);
   if (o.pixel_pitch_um > 0) camera.pixel_pitch_um = o.pixel_pitch_um;
   std::fputs(describe_camera(camera).c_str(), stdout);
   const GridValues field = distortion_field(camera.model, o.step_px);
@@ -64,6 +74,7 @@ void run_show(const ShowOptions& o) {
 
 void run_compare(const CompareOptions& o) {
   if (!(o.distance_mm > 0)) throw InputError("", "--distance-mm", "must be positive");
+  check_plot({o.a, o.b}, o.plot);
   const Camera a = read_camera(o.a, o.camera_a);
   const Camera b = read_camera(o.b, o.camera_b);
   if (a.model.width_px() != b.model.width_px() || a.model.height_px() != b.model.height_px())
@@ -71,6 +82,7 @@ void run_compare(const CompareOptions& o) {
                      fmt::format("is {}x{} px but '{}' is {}x{} px; compare models of the same sensor",
                                  b.model.width_px(), b.model.height_px(), o.a, a.model.width_px(),
                                  a.model.height_px()));
+  check_sample_grid("--step-px", a.model.width_px(), a.model.height_px(), o.step_px);
   RigidTransform b_from_a;
   if (o.use_poses) {
     if (!a.camera_from_world) throw InputError(o.a, "camera_from_world", "--use-poses needs a pose in both files");
@@ -116,8 +128,11 @@ void register_camera_commands(CLI::App& app) {
   s->add_option("camera_file", show->input, "Camera file")->required()->check(CLI::ExistingFile);
   s->add_option("--camera", show->camera, "Which camera of a multi-camera file");
   s->add_option("--pixel-pitch-um", show->pixel_pitch_um, "Sensor pixel size in um, if the file lacks it");
-  s->add_option("--plot", show->plot, "Write the distortion field as a PNG");
-  s->add_option("--step-px", show->step_px, "Spacing of the plotted samples in px")->check(CLI::PositiveNumber);
+  s->add_option("--plot", show->plot, "Write the distortion field as a PNG (.png)");
+  s->add_option("--step-px", show->step_px,
+                fmt::format("Spacing of the plotted samples in px (at most {:g} samples over the image)", kMaxGridSamples))
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   s->callback([show] { run_show(*show); });
 
   auto compare = std::make_shared<CompareOptions>();
@@ -127,10 +142,15 @@ void register_camera_commands(CLI::App& app) {
   p->add_option("b", compare->b, "Second camera file")->required()->check(CLI::ExistingFile);
   p->add_option("--camera-a", compare->camera_a, "Which camera of A");
   p->add_option("--camera-b", compare->camera_b, "Which camera of B");
-  p->add_option("--distance-mm", compare->distance_mm, "Distance of the compared points along the rays, mm");
+  p->add_option("--distance-mm", compare->distance_mm, "Distance of the compared points along the rays, mm")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   p->add_flag("--use-poses", compare->use_poses, "Compare through both files' poses instead of intrinsics only");
-  p->add_option("--plot", compare->plot, "Write the difference heat map as a PNG");
-  p->add_option("--step-px", compare->step_px, "Spacing of the samples in px")->check(CLI::PositiveNumber);
+  p->add_option("--plot", compare->plot, "Write the difference heat map as a PNG (.png)");
+  p->add_option("--step-px", compare->step_px,
+                fmt::format("Spacing of the samples in px (at most {:g} samples over the image)", kMaxGridSamples))
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   p->callback([compare] { run_compare(*compare); });
 }
 

@@ -15,6 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "apps/cli_checks.h"
 #include "apps/cli_files.h"
 #include "apps/commands.h"
 #include "apps/correction_setup.h"
@@ -63,6 +64,16 @@ LeastSquaresOptions least_squares_options(const CorrectOptions& o) {
 }
 
 SheetGrid grid_for(const CorrectionScene& cs, double mm_per_px) {
+  // The limit stated here, before any work and with readable numbers.
+  const double es = cs.trace.sheet.extent_s_mm, et = cs.trace.sheet.extent_t_mm;
+  const double cells = std::ceil(es / mm_per_px) * std::ceil(et / mm_per_px);
+  if (!(mm_per_px > 0) || !(cells <= static_cast<double>(kMaxSheetGridCells)))
+    throw InputError("", "--mm-per-px",
+                     fmt::format("{} mm makes a grid of {} cells over the {} x {} mm sheet; the limit is {} cells "
+                                 "(give about {} mm or more)",
+                                 number(mm_per_px), number(cells), number(es), number(et),
+                                 number(static_cast<double>(kMaxSheetGridCells)),
+                                 number(std::sqrt(es * et / static_cast<double>(kMaxSheetGridCells)) * 1.001)));
   try {
     return sheet_grid_covering(cs.trace.sheet, mm_per_px);
   } catch (const std::invalid_argument& e) {
@@ -147,17 +158,14 @@ void print_coverage(const CellCounts& n, const char* what) {
               n.low_weight, n.inside_solid);
 }
 
-// Output names: DIR/<input stem>.tif, distinct, none of them an input.
-std::vector<std::string> output_names(const std::vector<std::string>& inputs, const std::string& dir,
-                                      const std::vector<std::string>& other_inputs) {
+// Output names: DIR/<input stem>.tif, distinct (check_outputs then checks them against the inputs).
+std::vector<std::string> output_names(const std::vector<std::string>& inputs, const std::string& dir) {
   std::vector<std::string> out;
   std::set<std::string> seen;
   for (const std::string& in : inputs) {
     const std::string name = (fs::path(dir) / (fs::path(in).stem().string() + ".tif")).string();
     if (!seen.insert(fs::weakly_canonical(name).string()).second)
       throw InputError(in, "", "two frames would be written to the same output " + name + " (rename one)");
-    for (const std::string& i : inputs) check_not_input(i, name);
-    for (const std::string& i : other_inputs) check_not_input(i, name);
     out.push_back(name);
   }
   return out;
@@ -174,8 +182,18 @@ void run_one_camera(const CorrectOptions& o) {
   const std::vector<std::string> inputs = expand_photo_inputs(o.images);
   CorrectionScene cs = read_correction_scene(o.scene);
   const CorrectionSettings s = settings(o, (fs::path(o.output) / "cache").string());
-  const std::vector<std::string> outputs = output_names(inputs, o.output, {o.scene});
+  const std::vector<std::string> outputs = output_names(inputs, o.output);
   const int ci = find_camera(cs.scene, o.camera, "--camera");
+  // Every output against every input (the scene's files included), before any work.
+  std::vector<std::string> all_inputs = scene_input_files(cs.scene);
+  all_inputs.insert(all_inputs.end(), inputs.begin(), inputs.end());
+  std::vector<OutputFile> all_outputs;
+  for (const std::string& out : outputs) all_outputs.push_back({out, "-o"});
+  all_outputs.push_back({(fs::path(o.output) / "mask.tif").string(), "-o"});
+  if (o.grid == "sheet") all_outputs.push_back({(fs::path(o.output) / "sheet_grid.yaml").string(), "-o"});
+  if (!s.cache_dir.empty()) all_outputs.push_back({correction_cache_files(cs.scene, ci, s).map, "--cache-dir"});
+  check_outputs(all_inputs, all_outputs);
+  if (o.mm_per_px > 0) grid_for(cs, o.mm_per_px);
   std::vector<std::size_t> frames(inputs.size());
   for (std::size_t i = 0; i < frames.size(); ++i) frames[i] = i;
   if (!o.shard.empty()) {
@@ -183,13 +201,15 @@ void run_one_camera(const CorrectOptions& o) {
     frames = shard_frames(inputs.size(), k, n);
   }
   if (o.prepare_only) frames.clear();
-  for (const char* side : {"mask.tif", "sheet_grid.yaml"})
-    for (const std::string& in : inputs) check_not_input(in, (fs::path(o.output) / side).string());
   check_frame_headers(inputs, cs, ci, o.binning);
   fs::create_directories(o.output);
 
   const GlassRemovedView direct = glass_removed_view(cs, ci, s);
   const SheetGrid grid = grid_for(cs, o.mm_per_px > 0 ? o.mm_per_px : direct.footprint_mm);
+  if (!s.cache_dir.empty()) {
+    all_outputs.push_back({correction_cache_files(cs.scene, ci, s, grid.cols, grid.rows).op, "--cache-dir"});
+    check_outputs(all_inputs, all_outputs);
+  }
   std::printf("scene %s: camera '%s'; sheet grid %dx%d cells of %.4g mm%s\n", o.scene.c_str(),
               cs.scene.cameras[static_cast<std::size_t>(ci)].name.c_str(), grid.cols, grid.rows, grid.mm_per_px,
               o.mm_per_px > 0 ? "" : " (the camera's own pixel on the sheet)");
@@ -259,7 +279,8 @@ void run_one_camera(const CorrectOptions& o) {
       [&](std::size_t i, const Frame& f) { write_gray_image(outputs[i], f.result.data(), out_w, out_h, format); },
       [&](std::size_t done, std::size_t) { bar.set_done(done); });
   bar.finish();
-  std::printf("corrected %zu frames in %.2f s (%.1f frames/s, %s, %s grid %dx%d)%s; wrote %s/\n", st.corrected,
+  std::printf("corrected %s in %.2f s (%.1f frames/s, %s, %s grid %dx%d)%s; wrote %s/\n",
+              count_of(st.corrected, "frame").c_str(),
               st.seconds, st.corrected / std::max(1e-9, st.seconds), least ? "least squares" : "back-projection",
               on_camera ? "camera" : "sheet", out_w, out_h,
               st.skipped ? fmt::format("; {} already done, skipped", st.skipped).c_str() : "", o.output.c_str());
@@ -311,21 +332,20 @@ void run_several_cameras(const CorrectOptions& o) {
   const bool single_file = count == 1 && (lower_extension(o.output) == ".tif" || lower_extension(o.output) == ".tiff");
   const std::string dir = single_file ? fs::path(o.output).parent_path().string() : o.output;
   const CorrectionSettings s = settings(o, ((dir.empty() ? fs::path(".") : fs::path(dir)) / "glasspiv-cache").string());
-  std::vector<std::string> all_inputs = {o.scene};
+  std::vector<std::string> all_inputs = scene_input_files(cs.scene);
   for (const auto& pc : per_camera) all_inputs.insert(all_inputs.end(), pc.second.begin(), pc.second.end());
-  std::vector<std::string> outputs;
-  if (single_file) {
-    for (const std::string& i : all_inputs) check_not_input(i, o.output);
-    outputs = {o.output};
-  } else {
-    outputs = output_names(per_camera.front().second, o.output, all_inputs);
-  }
+  const std::vector<std::string> outputs =
+      single_file ? std::vector<std::string>{o.output} : output_names(per_camera.front().second, o.output);
   const std::string stem = single_file ? (fs::path(dir) / fs::path(o.output).stem()).string() + "_" : (fs::path(dir) / "").string();
   const std::string mask_path = stem + "mask.tif", coverage_path = stem + "coverage.tif";
-  for (const std::string& i : all_inputs) {
-    check_not_input(i, mask_path);
-    check_not_input(i, coverage_path);
-  }
+  // Every output against every input (the scene's files included), before any work.
+  std::vector<OutputFile> all_outputs;
+  for (const std::string& out : outputs) all_outputs.push_back({out, "-o"});
+  for (const std::string& side : {mask_path, coverage_path, stem + "sheet_grid.yaml"}) all_outputs.push_back({side, "-o"});
+  if (!s.cache_dir.empty())
+    for (const auto& pc : per_camera) all_outputs.push_back({correction_cache_files(cs.scene, pc.first, s).map, "--cache-dir"});
+  check_outputs(all_inputs, all_outputs);
+  if (o.mm_per_px > 0) grid_for(cs, o.mm_per_px);
   std::vector<std::size_t> frames(count);
   for (std::size_t i = 0; i < count; ++i) frames[i] = i;
   if (!o.shard.empty()) {
@@ -338,8 +358,14 @@ void run_several_cameras(const CorrectOptions& o) {
 
   const GlassRemovedView direct = glass_removed_view(cs, per_camera.front().first, s);
   const SheetGrid grid = grid_for(cs, o.mm_per_px > 0 ? o.mm_per_px : direct.footprint_mm);
-  std::printf("scene %s: %zu cameras, %zu frames each; sheet grid %dx%d cells of %.4g mm\n", o.scene.c_str(),
-              per_camera.size(), count, grid.cols, grid.rows, grid.mm_per_px);
+  if (!s.cache_dir.empty()) {
+    for (const auto& pc : per_camera)
+      all_outputs.push_back({correction_cache_files(cs.scene, pc.first, s, grid.cols, grid.rows).op, "--cache-dir"});
+    check_outputs(all_inputs, all_outputs);
+  }
+  std::printf("scene %s: %s, %s each; sheet grid %dx%d cells of %.4g mm\n", o.scene.c_str(),
+              count_of(per_camera.size(), "camera").c_str(), count_of(count, "frame").c_str(), grid.cols, grid.rows,
+              grid.mm_per_px);
   for (const auto& pc : per_camera) add_correction_camera(cs, pc.first, grid, s);
   std::vector<CameraOperator> ops = camera_operators(cs);
   for (std::size_t k = 0; k < cs.cameras.size(); ++k)
@@ -402,7 +428,8 @@ void run_several_cameras(const CorrectOptions& o) {
       [&](std::size_t i, const Frame& f) { write_gray_image(outputs[i], f.result.data(), grid.cols, grid.rows, format); },
       [&](std::size_t done, std::size_t) { bar.set_done(done); });
   bar.finish();
-  std::printf("corrected %zu instants in %.2f s (%.2f per s, %s%s)%s; mask %s, coverage count %s\n", st.corrected,
+  std::printf("corrected %s in %.2f s (%.2f per s, %s%s)%s; mask %s, coverage count %s\n",
+              count_of(st.corrected, "instant").c_str(),
               st.seconds, st.corrected / std::max(1e-9, st.seconds), least ? "least squares" : "accumulation",
               least && st.corrected ? fmt::format(", {:.0f} iterations each", double(iterations) / st.corrected).c_str() : "",
               st.skipped ? fmt::format("; {} already done, skipped", st.skipped).c_str() : "", mask_path.c_str(),
@@ -428,7 +455,6 @@ struct CoverageOptions {
 
 void run_coverage(const CoverageOptions& o) {
   if (lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
-  check_not_input(o.scene, o.output);
   CorrectionScene cs = read_correction_scene(o.scene);
   std::vector<int> indices;
   if (o.cameras.empty())
@@ -443,8 +469,15 @@ void run_coverage(const CoverageOptions& o) {
   co.cache_dir = o.cache_dir;
   const fs::path parent = fs::path(o.output).parent_path();
   const CorrectionSettings s = settings(co, ((parent.empty() ? fs::path(".") : parent) / "glasspiv-cache").string());
+  // Every output against every file the scene reads, before any work.
+  const std::vector<std::string> inputs = scene_input_files(cs.scene);
+  std::vector<OutputFile> outputs = {{o.output, "-o"}};
+  for (int ci : indices) outputs.push_back({correction_cache_files(cs.scene, ci, s).map, "--cache-dir"});
+  check_outputs(inputs, outputs);
   const SheetGrid grid =
       grid_for(cs, o.mm_per_px > 0 ? o.mm_per_px : glass_removed_view(cs, indices.front(), s).footprint_mm);
+  for (int ci : indices) outputs.push_back({correction_cache_files(cs.scene, ci, s, grid.cols, grid.rows).op, "--cache-dir"});
+  check_outputs(inputs, outputs);
   std::printf("scene %s: sheet grid %dx%d cells of %.4g mm\n", o.scene.c_str(), grid.cols, grid.rows, grid.mm_per_px);
   for (int ci : indices) add_correction_camera(cs, ci, grid, s);
   const std::vector<CameraOperator> ops = camera_operators(cs);
@@ -492,26 +525,34 @@ void add_common(CLI::App* c, CorrectOptions& o) {
                 "Sheet grid pitch in mm (default: the first camera's own pixel on the sheet, glass removed)")
       ->check(CLI::PositiveNumber);
   c->add_option("--method", o.method, "accumulate (back-projection, the published method) or lsq (least squares)")
-      ->check(CLI::IsMember({"accumulate", "lsq"}));
-  c->add_option("--smoothness", o.smoothness, "Least squares: weight of the gradient penalty (dimensionless, default 0.01)")
-      ->check(CLI::Range(0.0, 1e6));
-  c->add_option("--max-iterations", o.max_iterations, "Least squares: most CGLS iterations (default 100)")
-      ->check(CLI::Range(1, 100000));
-  c->add_option("--format", o.format, "Output pixels: 16 (default) or float");
+      ->check(CLI::IsMember({"accumulate", "lsq"}))
+      ->capture_default_str();
+  c->add_option("--smoothness", o.smoothness, "Least squares: weight of the gradient penalty (dimensionless)")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  c->add_option("--max-iterations", o.max_iterations, "Least squares: most CGLS iterations")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  c->add_option("--format", o.format, "Output pixels: 16 or float")->capture_default_str();
   c->add_option("--min-pixels", o.min_pixels,
-                "Mask: fewest camera pixels per sheet cell (default 0.25; docs/correction.md)")
-      ->check(CLI::Range(0.0, 1e6));
-  c->add_option("--min-weight", o.min_weight, "Mask: least light per pixel that sees a cell directly (default 0.1)")
-      ->check(CLI::Range(0.0, 1.0));
+                "Mask: fewest camera pixels per sheet cell (docs/correction.md)")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  c->add_option("--min-weight", o.min_weight, "Mask: least light per pixel that sees a cell directly")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   c->add_option("--shard", o.shard, "K/N: correct frames K, K+N, K+2N, ... only (0 <= K < N; docs/cluster.md)");
   c->add_option("--cache-dir", o.cache_dir, "Where transport maps and operators are cached (default: beside the output)");
   c->add_flag("--no-cache", o.no_cache, "Trace and build without reading or writing a cache");
   c->add_flag("--prepare-only", o.prepare_only,
               "Build the caches and write the mask, correct no frame (before a job array: docs/cluster.md)");
-  c->add_option("--binning", o.binning, "Cameras read out K x K binned (the frames must be too)")->check(CLI::Range(1, 64));
-  c->add_option("--samples", o.samples, "Map samples per pixel axis (default 1)")->check(CLI::Range(1, 16));
-  c->add_option("--trace-min-weight", o.trace_min_weight, "Map: branches below this weight are not followed (default 0.01)")
-      ->check(CLI::Range(0.0, 1.0));
+  c->add_option("--binning", o.binning, "Cameras read out K x K binned (the frames must be too)")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  c->add_option("--samples", o.samples, "Map samples per pixel axis")->check(CLI::Range(1, 16))->capture_default_str();
+  c->add_option("--trace-min-weight", o.trace_min_weight, "Map: branches below this weight are not followed")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   c->add_flag("--no-reflections", o.no_reflections, "Map: follow refracted branches only");
   c->add_option("--threads", o.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
 }
@@ -535,8 +576,9 @@ void register_correct_commands(CLI::App& app) {
                 "CAMERA=FILE, CAMERA=FOLDER or CAMERA=PATTERN, once per camera: several cameras, frames matched by index");
   c->add_option("--camera-weight", o->camera_weights,
                 "CAMERA=W: that camera's share in a multi-camera reconstruction (default 1; 0 leaves it out)");
-  CLI::Option* grid = c->add_option("--grid", o->grid, "camera (the same camera with the glass removed; one camera only) or sheet (mm grid)")
-      ->check(CLI::IsMember({"camera", "sheet"}));
+  CLI::Option* grid = c->add_option("--grid", o->grid, "camera (the same camera with the glass removed; one camera only) or sheet (mm grid; the default with --frame)")
+      ->check(CLI::IsMember({"camera", "sheet"}))
+      ->capture_default_str();
   add_common(c, *o);
   c->callback([o, grid]() {
     CorrectOptions opts = *o;
@@ -552,11 +594,15 @@ void register_correct_commands(CLI::App& app) {
   g->add_option("--camera", v->cameras, "Cameras to use (repeat; default: all of the scene's)");
   g->add_option("--mm-per-px", v->mm_per_px, "Sheet grid pitch in mm (default: the first camera's pixel on the sheet)")
       ->check(CLI::PositiveNumber);
-  g->add_option("--min-pixels", v->min_pixels, "Mask: fewest camera pixels per sheet cell (default 0.25)")
-      ->check(CLI::Range(0.0, 1e6));
-  g->add_option("--min-weight", v->min_weight, "Mask: least light per pixel that sees a cell directly (default 0.1)")
-      ->check(CLI::Range(0.0, 1.0));
-  g->add_option("--binning", v->binning, "Cameras read out K x K binned (a quick plan)")->check(CLI::Range(1, 64));
+  g->add_option("--min-pixels", v->min_pixels, "Mask: fewest camera pixels per sheet cell")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  g->add_option("--min-weight", v->min_weight, "Mask: least light per pixel that sees a cell directly")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  g->add_option("--binning", v->binning, "Cameras read out K x K binned (a quick plan)")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
   g->add_option("--cache-dir", v->cache_dir, "Where maps and operators are cached (default: beside the picture)");
   g->add_flag("--no-reflections", v->no_reflections, "Follow refracted branches only");
   g->add_option("--threads", v->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);

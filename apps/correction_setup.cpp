@@ -57,13 +57,9 @@ GlassRemovedView glass_removed_view(const CorrectionScene& cs, int camera_index,
 void add_correction_camera(CorrectionScene& cs, int camera_index, const SheetGrid& grid, const CorrectionSettings& s) {
   const SceneCamera& sc = cs.scene.cameras[static_cast<std::size_t>(camera_index)];
   CorrectionCamera cam{sc.name, sc.field, camera_model(cs, camera_index, s), *sc.camera.camera_from_world, {}};
-  const std::string stem = s.binning > 1 ? fmt::format("{}_bin{}", sc.name, s.binning) : sc.name;
-  std::string map_path, op_path;
-  if (!s.cache_dir.empty()) {
-    fs::create_directories(s.cache_dir);
-    map_path = (fs::path(s.cache_dir) / (stem + ".tmap")).string();
-    op_path = (fs::path(s.cache_dir) / fmt::format("{}_{}x{}.gop", stem, grid.cols, grid.rows)).string();
-  }
+  const CorrectionCacheFiles cache = correction_cache_files(cs.scene, camera_index, s, grid.cols, grid.rows);
+  const std::string map_path = cache.map, op_path = cache.op;
+  if (!s.cache_dir.empty()) fs::create_directories(s.cache_dir);
   const std::uint64_t map_fp = transport_map_fingerprint(cs.trace, cam.model, cam.pose, s.trace, s.samples);
   // A valid cached operator needs no map.
   if (!op_path.empty()) {
@@ -112,6 +108,17 @@ void add_correction_camera(CorrectionScene& cs, int camera_index, const SheetGri
                 op.written ? (", cached in " + op_path).c_str() : "");
   cam.op = std::move(op.op);
   cs.cameras.push_back(std::move(cam));
+}
+
+CorrectionCacheFiles correction_cache_files(const Scene& scene, int camera_index, const CorrectionSettings& s, int cols,
+                                            int rows) {
+  if (s.cache_dir.empty()) return {};
+  const SceneCamera& sc = scene.cameras[static_cast<std::size_t>(camera_index)];
+  const std::string stem = s.binning > 1 ? fmt::format("{}_bin{}", sc.name, s.binning) : sc.name;
+  CorrectionCacheFiles f;
+  f.map = (fs::path(s.cache_dir) / (stem + ".tmap")).string();
+  if (cols > 0) f.op = (fs::path(s.cache_dir) / fmt::format("{}_{}x{}.gop", stem, cols, rows)).string();
+  return f;
 }
 
 std::vector<CameraOperator> camera_operators(const CorrectionScene& cs) {

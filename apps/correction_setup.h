@@ -61,4 +61,13 @@ void add_correction_camera(CorrectionScene& cs, int camera_index, const SheetGri
 
 std::vector<CameraOperator> camera_operators(const CorrectionScene& cs);
 
+// The cache files add_correction_camera reads and writes for camera index
+// ("" when s.cache_dir is empty): its transport map, and its operator on a
+// grid of cols x rows (op "" when cols is 0).
+struct CorrectionCacheFiles {
+  std::string map, op;
+};
+CorrectionCacheFiles correction_cache_files(const Scene& scene, int camera_index, const CorrectionSettings& s,
+                                            int cols = 0, int rows = 0);
+
 }  // namespace glasspiv

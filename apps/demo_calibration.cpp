@@ -43,6 +43,7 @@ DemoCalibrationSummary run_calibration_demo(const std::string& folder, const std
   const TargetRender board = render_target(spec, kBoardPxPerMm, default_margin_mm(spec));
   const auto poses = calibration_view_poses(truth.model, board_size_mm(spec), kViews, kNearMm, kFarMm, kMaxTiltDeg, kPoseSeed);
 
+  std::printf("   photographing the board from %d views...\n", kViews);
   std::vector<std::string> photos;
   {
     ProgressBar bar("photographing", poses.size());
@@ -62,16 +63,19 @@ DemoCalibrationSummary run_calibration_demo(const std::string& folder, const std
   }
 
   // From here on, exactly what `glasspiv calib intrinsics photos/ --target T` does.
+  std::printf("   detecting the corners in the %zu photos...\n", photos.size());
   PhotoDetectionOptions detection;
   detection.quiet = true;
   const Observations observations = detect_in_photos(photos, spec, target_path, detection);
   write_observations((dir / "observations.yaml").string(), observations);
+  std::printf("   fitting the intrinsics and cross-validating...\n");
   IntrinsicFitOptions options;
   options.lens_model = truth.model.lens_model();
   const IntrinsicFit fit = fit_intrinsics(observations, options);
   const CrossValidation cv = cross_validation(observations, options);
   const Camera fitted{"session_fitted", fit.camera, std::nullopt, truth.pixel_pitch_um};
   write_cameras((dir / "session_fitted.yaml").string(), {fitted});
+  std::printf("   writing the report...\n");
   const CalibrationReportFiles files =
       write_calibration_report((dir / "report").string(), {observations, options, fit, &cv, fitted.name,
                                                             truth.pixel_pitch_um, Camera{truth}});

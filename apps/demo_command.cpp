@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "apps/camera_text.h"
+#include "apps/cli_files.h"
 #include "apps/commands.h"
 #include "apps/demo_calibration.h"
 #include "apps/demo_correction.h"
@@ -44,7 +45,10 @@ std::pair<double, double> pose_difference(const Camera& a, const Camera& b) {
 
 void run_demo(const std::string& out_dir) {
   const fs::path out(out_dir);
+  // The demo owns its folder: anything in it that is not a plain file or folder is refused before any work.
+  check_output_folder(out_dir, "-o");
   std::printf("glasspiv demo -> %s/\n\n", out_dir.c_str());
+  std::printf("Writing the example camera in four formats and the example target...\n");
 
   // 1. The example camera, as each tool of the field would save it.
   const fs::path cameras_dir = out / "cameras", targets_dir = out / "targets";
@@ -133,12 +137,12 @@ void run_demo(const std::string& out_dir) {
   std::printf("   report: %s\n", session.report_html.c_str());
 
   // 5. The reference-like reactor, rendered.
-  const fs::path scenes_dir = out / "scenes";
-  for (const auto& [name, contents] : demo_scenes::embedded_files())
-    write_file_atomically((scenes_dir / std::string(name)).string(), contents);
   constexpr int kBinning = 4;
   std::printf("\n5. The packed-bed reactor (bcc, 40 mm N-BK7 spheres, the sheet behind two layers), its camera "
               "binned %dx%d:\n", kBinning, kBinning);
+  const fs::path scenes_dir = out / "scenes";
+  for (const auto& [name, contents] : demo_scenes::embedded_files())
+    write_file_atomically((scenes_dir / std::string(name)).string(), contents);
   const DemoRenderSummary render =
       run_render_demo((out / "render").string(), (scenes_dir / "reactor.yaml").string(), kBinning);
   std::printf("   transport map %dx%d %s in %.2f s (%.2f sheet crossings per pixel; %.0f%% of the rays met no "

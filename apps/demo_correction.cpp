@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
@@ -64,6 +65,7 @@ DemoCorrectionSummary run_correction_demo(const std::string& folder, const std::
   settings.report = false;
 
   // One camera, onto its own pixels with the glass removed.
+  std::printf("   one camera: its correction operator (from the cache if valid)...\n");
   {
     CorrectionScene cs = read_correction_scene((fs::path(scenes_dir) / "reactor.yaml").string());
     const GlassRemovedView direct = glass_removed_view(cs, 0, settings);
@@ -77,6 +79,7 @@ DemoCorrectionSummary run_correction_demo(const std::string& folder, const std::
     const std::vector<CellState> states = classify_cells(camera_operators(cs), cs.trace, settings.mask);
     s.one_valid_fraction = count_cells(states).valid_fraction_of_fluid();
 
+    std::printf("   one camera: rendering a distorted frame and correcting it...\n");
     // The distorted frame: the field at 4x finer texels, footprint-filtered through the map's operator.
     const SheetPicture fine = particles(cs.trace.sheet, direct.footprint_mm, direct.footprint_mm / 4);
     const SheetPicture truth = particles(cs.trace.sheet, direct.footprint_mm, direct.footprint_mm);
@@ -115,6 +118,7 @@ DemoCorrectionSummary run_correction_demo(const std::string& folder, const std::
   }
 
   // Five cameras, onto the sheet grid.
+  std::printf("   five cameras: their correction operators (from the cache if valid)...\n");
   {
     CorrectionSettings five = settings;
     five.binning = 2 * binning;
@@ -131,6 +135,7 @@ DemoCorrectionSummary run_correction_demo(const std::string& folder, const std::
     s.centre_valid_fraction =
         count_cells(classify_cells({ops[static_cast<std::size_t>(centre)]}, cs.trace, five.mask)).valid_fraction_of_fluid();
 
+    std::printf("   five cameras: rendering their frames, then accumulation and least squares...\n");
     const SheetPicture fine = particles(cs.trace.sheet, direct.footprint_mm, direct.footprint_mm / 4);
     const SheetPicture truth = particles(cs.trace.sheet, direct.footprint_mm, direct.footprint_mm);
     const SheetTexture texture(fine.values.data(), fine.rows, fine.cols, fine.mm_per_texel);

@@ -1,5 +1,6 @@
 #include "apps/demo_render.h"
 
+#include <cstdio>
 #include <filesystem>
 
 #include "apps/render_scene.h"
@@ -34,6 +35,7 @@ DemoRenderSummary run_render_demo(const std::string& folder, const std::string& 
     if (!c.reused) bar.finish();
     return c;
   };
+  std::printf("   tracing the transport map (%dx%d px; reused if an earlier run left it)...\n", s.width, s.height);
   {
     const CachedTransportMap first = traced("trace map");
     s.trace_seconds = first.seconds;
@@ -50,6 +52,7 @@ DemoRenderSummary run_render_demo(const std::string& folder, const std::string& 
   const TransportMap* map = &again.map;
   Stopwatch clock;
 
+  std::printf("   rendering a checkerboard and a particle field through the map...\n");
   const SheetPlane& sheet = ps.trace.sheet;
   const SheetPicture checker = checkerboard_picture(sheet.extent_s_mm, sheet.extent_t_mm, 5.0);
   const SheetPicture particles = particle_picture(sheet.extent_s_mm, sheet.extent_t_mm, 1.0, 0.3, 0.075, 1);
@@ -64,6 +67,7 @@ DemoRenderSummary run_render_demo(const std::string& folder, const std::string& 
   write_gray_image(s.checkerboard_png, checker_image.data(), s.width, s.height, PixelFormat::uint8);
   write_gray_image(s.particles_tif, particle_image.data(), s.width, s.height, PixelFormat::uint16);
 
+  std::printf("   rendering the setup itself...\n");
   clock.restart();
   SetupLook look;
   look.background_radiance = 1;  // a lit backdrop shows the glass's edges

@@ -4,11 +4,51 @@
 
 #include <fmt/format.h>
 
+#include "apps/cli_checks.h"
 #include "apps/commands.h"
 #include "util/input_error.h"
 
+namespace {
+
+// The deepest subcommand the command line chose, and the first word it could
+// not place ("" if none): `glasspiv camera frobnicate --help` must not print
+// help and succeed.
+std::string unplaced_word(CLI::App& app, CLI::App*& deepest) {
+  deepest = &app;
+  for (;;) {
+    CLI::App* next = nullptr;
+    for (CLI::App* sub : deepest->get_subcommands())
+      if (sub->parsed()) next = sub;
+    if (!next) break;
+    deepest = next;
+  }
+  for (CLI::App* a = deepest; a; a = a->get_parent()) {
+    const std::vector<std::string> extra = a->remaining();
+    if (!extra.empty()) return extra.front();
+  }
+  return "";
+}
+
+int help_or_unknown(CLI::App& app, const CLI::Error& e) {
+  CLI::App* deepest = nullptr;
+  const std::string word = unplaced_word(app, deepest);
+  if (!word.empty()) {
+    std::string path;
+    for (CLI::App* a = deepest; a; a = a->get_parent()) path = a->get_name() + (path.empty() ? "" : " " + path);
+    std::fprintf(stderr, "glasspiv: error: '%s' is not a command or argument of `%s` (see `%s --help`)\n",
+                 word.c_str(), path.c_str(), path.c_str());
+    return 2;
+  }
+  return app.exit(e);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  CLI::App app{"glasspiv: calibrated, ray-traced correction of PIV images taken through glass"};
+  // Progress lines reach a log or a pipe as they are printed, not at exit.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  // Named, so usage lines read `glasspiv ...`, not the executable's full path.
+  CLI::App app{"glasspiv: calibrated, ray-traced correction of PIV images taken through glass", "glasspiv"};
   app.set_version_flag("--version", std::string("glasspiv ") + GLASSPIV_VERSION);
   app.require_subcommand(1);
   glasspiv::register_camera_commands(app);
@@ -17,12 +57,14 @@ int main(int argc, char** argv) {
   glasspiv::register_calib_commands(app);
   glasspiv::register_render_command(app);
   glasspiv::register_correct_commands(app);
+  // One check for the numbers of every command (finite, decimal, not negative where unsigned).
+  glasspiv::check_numeric_options(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
+    return help_or_unknown(app, e);
   } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
+    return help_or_unknown(app, e);
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {

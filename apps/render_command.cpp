@@ -1,11 +1,13 @@
 // glasspiv render: the image a scene camera records of a textured light sheet
 // (through the transport map, cached on request), or the setup itself.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 
 #include <fmt/format.h>
 
+#include "apps/cli_checks.h"
 #include "apps/cli_files.h"
 #include "apps/commands.h"
 #include "apps/render_scene.h"
@@ -62,6 +64,28 @@ std::string with_suffix(const std::string& path, const std::string& name) {
 void render_camera(const RenderOptions& o, const std::string& camera_name, const std::string& output,
                    const std::string& map_path, PixelFormat format);
 
+// The built-in picture's size and particle count, against their limits, before any tracing.
+void check_sheet_picture(const RenderOptions& o, const Scene& scene) {
+  if (o.pattern.empty() || !scene.sheet) return;
+  const double es = scene.sheet->extent_mm[0], et = scene.sheet->extent_mm[1];
+  const bool particles = o.pattern == "particles";
+  const double texel = o.pattern == "checker" ? o.pattern_mm / 8 : o.pattern == "grid" ? o.pattern_mm / 20
+                                                                                        : o.particle_diameter_mm / 4;
+  const char* field = particles ? "--particle-diameter-mm" : "--pattern-mm";
+  const double texels = std::ceil(es / texel) * std::ceil(et / texel);
+  if (!(texels <= kMaxSheetPictureTexels))
+    throw InputError("", field,
+                     fmt::format("{} mm makes the {} picture of the {} x {} mm sheet {} texels ({} mm each); the limit is "
+                                 "{} texels",
+                                 number(particles ? o.particle_diameter_mm : o.pattern_mm), o.pattern, number(es),
+                                 number(et), number(texels), number(texel), number(kMaxSheetPictureTexels)));
+  if (particles && !(o.particle_density * es * et <= kMaxSheetParticles))
+    throw InputError("", "--particle-density",
+                     fmt::format("{} per mm^2 over the {} x {} mm sheet makes {} particles; the limit is {}",
+                                 number(o.particle_density), number(es), number(et),
+                                 number(o.particle_density * es * et), number(kMaxSheetParticles)));
+}
+
 void run_render(const RenderOptions& o) {
   const int sources = !o.sheet_texture.empty() + !o.pattern.empty() + o.setup;
   if (sources != 1)
@@ -76,23 +100,33 @@ void run_render(const RenderOptions& o) {
     throw InputError(o.output, "--format", "PNG holds 8 or 16 bits, not float (use .tif or .exr)");
   if (ext == ".exr" && format != PixelFormat::float32)
     throw InputError(o.output, "--format", "EXR holds float only (use .tif or .png for 8 or 16 bits)");
-  if (o.camera != "all") {
-    render_camera(o, o.camera, o.output, o.map, format);
-    return;
-  }
-  // Every camera of the scene: OUT and MAP get the camera's name before their extension.
+  // Every camera's outputs, checked against every file the scene reads before any tracing.
+  // --camera all: OUT and MAP get the camera's name before their extension.
   const Scene scene = read_scene(o.scene);
-  for (const SceneCamera& cam : scene.cameras)
-    render_camera(o, cam.name, with_suffix(o.output, cam.name), o.map.empty() ? "" : with_suffix(o.map, cam.name),
-                  format);
+  struct Job {
+    std::string camera, output, map;
+  };
+  std::vector<Job> jobs;
+  if (o.camera != "all") {
+    jobs.push_back({o.camera, o.output, o.map});
+  } else {
+    for (const SceneCamera& cam : scene.cameras)
+      jobs.push_back({cam.name, with_suffix(o.output, cam.name), o.map.empty() ? "" : with_suffix(o.map, cam.name)});
+  }
+  std::vector<std::string> inputs = scene_input_files(scene);
+  if (!o.sheet_texture.empty()) inputs.push_back(o.sheet_texture);
+  std::vector<OutputFile> outputs;
+  for (const Job& j : jobs) {
+    outputs.push_back({j.output, "-o"});
+    if (!j.map.empty()) outputs.push_back({j.map, "--map"});
+  }
+  check_outputs(inputs, outputs);
+  check_sheet_picture(o, scene);
+  for (const Job& j : jobs) render_camera(o, j.camera, j.output, j.map, format);
 }
 
 void render_camera(const RenderOptions& o, const std::string& camera_name, const std::string& output,
                    const std::string& map_path, PixelFormat format) {
-  check_not_input(o.scene, output);
-  if (!o.sheet_texture.empty()) check_not_input(o.sheet_texture, output);
-  if (!map_path.empty()) check_not_input(o.scene, map_path);
-
   const PreparedScene ps = prepare_scene(o.scene, camera_name, o.binning);
   TraceOptions options;
   options.min_weight = o.min_weight;
@@ -100,7 +134,7 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
   options.reflections = !o.no_reflections;
   const Camera& camera = ps.camera();
   const RigidTransform& pose = *camera.camera_from_world;
-  std::printf("scene %s: %zu solids; camera '%s' %dx%d\n", o.scene.c_str(), ps.trace.solids.size(),
+  std::printf("scene %s: %s; camera '%s' %dx%d\n", o.scene.c_str(), count_of(ps.trace.solids.size(), "solid").c_str(),
               ps.camera_name().c_str(), camera.model.width_px(), camera.model.height_px());
 
   std::vector<float> image;
@@ -122,6 +156,8 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
                 stats.closed_form_rays, clock.seconds(), stats.threads);
   } else {
     const int samples = o.samples > 0 ? o.samples : 1;
+    // The picture (an image file read, or a pattern drawn) before the trace: a bad one fails at once.
+    const SheetTexture texture = sheet_picture(o, ps.trace.sheet);
     CachedTransportMap cached;
     {
       ProgressBar bar("trace map", static_cast<std::size_t>(camera.model.height_px()));
@@ -153,7 +189,6 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
       throw InputError(o.scene, ps.camera_field(),
                        fmt::format("camera '{}' sees none of the sheet: check its pose and the sheet's extent",
                                    ps.camera_name()));
-    const SheetTexture texture = sheet_picture(o, ps.trace.sheet);
     image = forward_render_values(map, texture, o.background >= 0 ? o.background : ps.scene.background.radiance);
   }
   if (o.gain != 1)
@@ -181,31 +216,39 @@ void register_render_command(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   r->add_option("--sheet-pattern", o->pattern, "Built-in picture on the sheet instead of an image")
       ->check(CLI::IsMember({"checker", "grid", "particles"}));
-  r->add_option("--pattern-mm", o->pattern_mm, "Checker square or grid pitch in mm (default 10)")
-      ->check(CLI::PositiveNumber);
-  r->add_option("--particle-density", o->particle_density, "Particles per mm^2 of sheet (default 2)")
-      ->check(CLI::NonNegativeNumber);
-  r->add_option("--particle-diameter-mm", o->particle_diameter_mm, "Particle image diameter at 1/e^2 (default 0.2)")
-      ->check(CLI::PositiveNumber);
-  r->add_option("--seed", o->seed, "Seed of the particle field (default 1)");
+  r->add_option("--pattern-mm", o->pattern_mm, "Checker square or grid pitch in mm")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  r->add_option("--particle-density", o->particle_density, "Particles per mm^2 of sheet")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  r->add_option("--particle-diameter-mm", o->particle_diameter_mm, "Particle image diameter at 1/e^2, mm")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  r->add_option("--seed", o->seed, "Seed of the particle field")->capture_default_str();
   r->add_flag("--setup", o->setup, "Render the setup itself (glass, opaque parts, targets, background)");
   r->add_option("--map", o->map,
                 "Transport map cache: reused when it was made for this exact scene, camera and settings; "
                 "otherwise traced and written there");
   r->add_option("--binning", o->binning,
                 "Render with the camera read out K x K binned (a quick preview at 1/K^2 of the cost)")
-      ->check(CLI::Range(1, 64));
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
   r->add_option("--samples", o->samples, "Samples per pixel axis (default 1; 2 with --setup)")
       ->check(CLI::Range(1, 16));
   r->add_option("--min-weight", o->min_weight, "Branches below this weight are not followed")
-      ->check(CLI::Range(0.0, 1.0));
-  r->add_option("--max-depth", o->max_depth, "Most interface events on one path")->check(CLI::Range(1, 1000));
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  r->add_option("--max-depth", o->max_depth, "Most interface events on one path")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   r->add_flag("--no-reflections", o->no_reflections, "Follow refracted branches only (no ghost images)");
   r->add_option("--background", o->background,
                 "Radiance of what lies beyond the scene (default: the scene's background.radiance; "
                 "1 makes glass edges visible in --setup)")
       ->check(CLI::NonNegativeNumber);
-  r->add_option("--gain", o->gain, "Multiply the radiance before writing (integer formats clip at 1)");
+  r->add_option("--gain", o->gain, "Multiply the radiance before writing (integer formats clip at 1)")
+      ->capture_default_str();
   r->add_option("--format", o->format, "8, 16 or float (default 16; float for .exr)");
   r->add_option("--threads", o->threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
   r->callback([o]() { run_render(*o); });

@@ -1,6 +1,7 @@
 // glasspiv target print | show
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 
 #include <fmt/format.h>
@@ -10,6 +11,7 @@
 #include "targets/target_image.h"
 #include "targets/target_spec.h"
 #include "targets/target_yaml.h"
+#include "util/atomic_file.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
@@ -26,20 +28,35 @@ void run_print(const PrintOptions& o) {
     throw InputError(o.svg, "-o", "must end in .svg: glasspiv writes SVG (and PNG with --png), no PDF; convert the "
                                   "SVG with e.g. rsvg-convert or Inkscape if you need one");
   if (!o.png.empty() && lower_extension(o.png) != ".png") throw InputError(o.png, "--png", "must end in .png");
-  if (!(o.dpi > 0) || o.dpi > 2400) throw InputError("", "--dpi", fmt::format("must be in (0, 2400], got {}", o.dpi));
+  if (!(o.dpi > 0) || o.dpi > 2400) throw InputError("", "--dpi", fmt::format("must be in (0, 2400], got {:.6g}", o.dpi));
+  std::vector<OutputFile> outputs;
+  if (!o.svg.empty()) outputs.push_back({o.svg, "-o"});
+  if (!o.png.empty()) outputs.push_back({o.png, "--png"});
+  check_outputs({o.spec}, outputs);
   const TargetSpec spec = read_target_yaml(o.spec);
   std::printf("%s\n", describe_target(spec).c_str());
+  // Both drawn into their temporaries first; renamed only when both succeeded,
+  // so a failure leaves neither (and no earlier file replaced).
+  std::vector<AtomicFileWriter> writers;
   if (!o.svg.empty()) {
-    check_not_input(o.spec, o.svg);
-    write_target_svg(o.svg, spec);
+    const std::string svg = target_svg(spec);
+    writers.push_back({o.svg, [svg, path = o.svg](const std::string& tmp) {
+                         std::ofstream out(tmp, std::ios::binary);
+                         out << svg;
+                         out.flush();
+                         if (!out) throw InputError(path, "", "write failed (disk full?)");
+                       }});
+  }
+  if (!o.png.empty())
+    writers.push_back({o.png, [&spec, dpi = o.dpi](const std::string& tmp) { write_target_png(tmp, spec, dpi); }});
+  write_files_atomically(writers);
+  if (!o.svg.empty()) {
     const Eigen::Vector2d page = target_svg_size_mm(spec);
     std::printf("wrote %s: %.1f x %.1f mm page. Print at 100 %% scale (no \"fit to page\") and check that the bar "
                 "under the board measures 100 mm.\n",
                 o.svg.c_str(), page.x(), page.y());
   }
   if (!o.png.empty()) {
-    check_not_input(o.spec, o.png);
-    write_target_png(o.png, spec, o.dpi);
     const Eigen::Vector2d board = board_size_mm(spec);
     const double margin = default_margin_mm(spec);
     std::printf("wrote %s at %g dpi (%.1f x %.1f mm with its margin; the resolution is stored in the PNG, which has "

@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "util/text_number.h"
+
 namespace glasspiv {
 
 SheetGrid sheet_grid_covering(const SheetPlane& sheet, double mm_per_px) {
@@ -12,7 +14,7 @@ SheetGrid sheet_grid_covering(const SheetPlane& sheet, double mm_per_px) {
   // The same count as render/sheet_pattern.h pictures of the sheet, so one at this pitch lies on the grid.
   const double cols = std::ceil(sheet.extent_s_mm / mm_per_px), rows = std::ceil(sheet.extent_t_mm / mm_per_px);
   if (!(cols * rows <= static_cast<double>(kMaxSheetGridCells)))
-    throw std::invalid_argument("sheet grid: " + std::to_string(cols) + " x " + std::to_string(rows) +
+    throw std::invalid_argument("sheet grid: " + format_number(cols) + " x " + format_number(rows) +
                                 " cells exceed the limit of " + std::to_string(kMaxSheetGridCells) +
                                 " (choose a larger mm per pixel)");
   SheetGrid g;

@@ -77,6 +77,31 @@ expect_error 2 "p.xml" "pixel" -- "$glasspiv" camera convert "$work/a.cameramode
 expect_error 2 "same sensor" -- "$glasspiv" camera compare "$cams/example.yaml" "$cams/wide_opencv8.yaml"
 expect_error 2 "--help" -- "$glasspiv" camera convert
 expect_error 2 "--help" -- "$glasspiv" frobnicate
+# An unknown subcommand is an error even with --help; usage lines name `glasspiv`, not a path.
+expect_error 2 "frobnicate" "not a command" -- "$glasspiv" frobnicate --help
+expect_error 2 "frobnicate" "glasspiv camera" -- "$glasspiv" camera frobnicate --help
+"$glasspiv" camera show --help | grep -q "^Usage: glasspiv camera show " && ok || fail "usage line does not read 'glasspiv camera show'"
+# Every option with a default shows it in --help.
+for pair in "render:--min-weight" "render:--max-depth" "render:--pattern-mm" "render:--gain" "camera show:--step-px" \
+  "camera compare:--step-px" "camera compare:--distance-mm" "correct:--min-weight" "coverage:--min-pixels"; do
+  # shellcheck disable=SC2086
+  "$glasspiv" ${pair%%:*} --help | grep -qE -- "${pair#*:} .*=[0-9]" && ok || fail "glasspiv ${pair%%:*} --help shows no default of ${pair#*:}"
+done
+
+# Numbers: finite only, unsigned ones not negative, and the work a value implies within a stated limit,
+# refused at once (timeout: no option may start minutes of work or a huge allocation).
+expect_error 2 "--step-px" "limit" "2.354 px" -- timeout 20 "$glasspiv" camera compare "$cams/example.yaml" "$cams/example.yaml" --step-px 0.01
+expect_error 2 "--step-px" "limit" -- timeout 20 "$glasspiv" camera show "$cams/example.yaml" --step-px 0.001
+expect_error 2 "--step-px" "finite" -- "$glasspiv" camera show "$cams/example.yaml" --step-px nan
+expect_error 2 "--distance-mm" "finite" -- "$glasspiv" camera compare "$cams/example.yaml" "$cams/example.yaml" --distance-mm inf
+expect_error 2 "x.yaml" "--plot" ".png" -- "$glasspiv" camera show "$cams/example.yaml" --plot "$work/x.yaml"
+[ ! -e "$work/x.yaml" ] && ok || fail "camera show --plot x.yaml wrote a file"
+expect_error 2 "--plot" ".png" -- "$glasspiv" camera compare "$cams/example.yaml" "$cams/example.yaml" --plot "$work/x.tif"
+printf 'x' >"$work/dummy_obs.yaml"
+expect_error 2 "--outlier-k" "finite" -- "$glasspiv" calib report "$work/dummy_obs.yaml" -o "$work/r" --outlier-k nan
+expect_error 2 "--distance-mm" "above 0" -- "$glasspiv" camera compare "$cams/example.yaml" "$cams/example.yaml" --distance-mm -1
+[ "$(wc -c <"$work/err")" -lt 200 ] && ok || fail "a range message printed hundreds of digits: $(cat "$work/err")"
+expect_error 2 "--dpi" "finite" -- "$glasspiv" target print "$src/data/targets/chessboard_9x6.yaml" --png "$work/x.png" --dpi nan
 
 # A calibration session on real photos (OpenCV's left*.jpg), then a report from
 # the saved observations, and the same fit read back from the camera file.
@@ -152,6 +177,61 @@ sed 's/material: grey}/material: N-BK7}/' "$work/lens.yaml" >"$work/glassrect.ya
 expect_error 2 "glassrect.yaml" "opaque" -- "$glasspiv" render "$work/glassrect.yaml" --setup -o "$work/x.tif"
 expect_error 2 "lens.tif" "input" -- "$glasspiv" render "$work/lens.yaml" --sheet-texture "$work/lens.tif" -o "$work/lens.tif"
 [ ! -e "$work/x.tif" ] && ok || fail "a failed render wrote an image"
+for opt in --min-weight --background --gain --pattern-mm; do
+  expect_error 2 "$opt" "finite" -- "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/x.tif" "$opt" nan
+done
+expect_error 2 "--seed" "negative" -- "$glasspiv" render "$work/lens.yaml" --sheet-pattern particles -o "$work/x.tif" --seed -1
+expect_error 2 "--samples" -- "$glasspiv" render "$work/lens.yaml" --setup -o "$work/x.tif" --samples 0x10
+expect_error 2 "--pattern-mm" "limit" -- timeout 20 "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/x.tif" --pattern-mm 1e-6
+expect_error 2 "--particle-diameter-mm" "limit" -- timeout 20 "$glasspiv" render "$work/lens.yaml" --sheet-pattern particles -o "$work/x.tif" --particle-diameter-mm 1e-300
+expect_error 2 "--particle-density" "limit" -- timeout 20 "$glasspiv" render "$work/lens.yaml" --sheet-pattern particles -o "$work/x.tif" --particle-density 1e300
+expect_error 2 "--threads" -- "$glasspiv" render "$work/lens.yaml" --setup -o "$work/x.tif" --threads 1000000
+grep -q "2 solids;" "$work/out" || "$glasspiv" render "$work/lens.yaml" --setup -o "$work/x.tif" --binning 16 >"$work/out" 2>&1
+grep -q "2 solids;" "$work/out" && ok || fail "render did not report '2 solids': $(cat "$work/out")"
+grep -v 'rectangle' "$work/lens.yaml" >"$work/one.yaml"
+expect_ok "$glasspiv" render "$work/one.yaml" --setup -o "$work/one.tif" --binning 16
+grep -q "1 solid;" "$work/out" && ok || fail "render said '1 solids': $(cat "$work/out")"
+rm -f "$work/x.tif"
+
+# No output may be a file the command reads (the scene's camera files and textures included),
+# outputs are distinct, and an existing output that is not a regular file is refused, all before any tracing.
+mkdir -p "$work/own"
+printf 'glasspiv_camera: 1\nname: small\nimage_size_px: [160, 120]\nlens_model: pinhole\nfocal_length_px: [400, 400]\nprincipal_point_px: [79.5, 59.5]\n' >"$work/own/cam.yaml"
+cp "$work/setup.png" "$work/own/tex.png"
+cat >"$work/own/s.yaml" <<'YAML'
+glasspiv_scene: 1
+fluid: air
+solids:
+  - {type: sphere, centre_mm: [0, 0, 0], diameter_mm: 40, material: N-BK7}
+  - {type: rectangle, centre_mm: [0, 0, 120], size_mm: [200, 200], normal: [0, 0, -1], up: [0, 1, 0], texture: tex.png}
+sheet: {origin_mm: [0, 0, 40], s_axis: [-1, 0, 0], t_axis: [0, 1, 0], extent_mm: [100, 100], thickness_mm: 1}
+cameras:
+  - name: small
+    file: cam.yaml
+    pose: {position_mm: [0, 0, -500], look_at_mm: [0, 0, 40], up: [0, 1, 0]}
+YAML
+cp "$work/own/cam.yaml" "$work/own/cam.keep"
+expect_error 2 "cam.yaml" "--map" "never overwrites" -- "$glasspiv" render "$work/own/s.yaml" --sheet-pattern grid -o "$work/own/x.tif" --map "$work/own/cam.yaml"
+cmp -s "$work/own/cam.yaml" "$work/own/cam.keep" && ok || fail "render --map overwrote the scene's camera file"
+expect_error 2 "tex.png" "--map" "never overwrites" -- "$glasspiv" render "$work/own/s.yaml" --sheet-pattern grid -o "$work/own/x.tif" --map "$work/own/tex.png"
+expect_error 2 "tex.png" "-o" "never overwrites" -- "$glasspiv" render "$work/own/s.yaml" --setup -o "$work/own/tex.png"
+expect_error 2 "x.tif" "same output" -- "$glasspiv" render "$work/own/s.yaml" --sheet-pattern grid -o "$work/own/x.tif" --map "$work/own/x.tif"
+expect_error 2 "tex.png" "never overwrites" -- "$glasspiv" coverage "$work/own/s.yaml" -o "$work/own/tex.png"
+ln -s cam.keep "$work/own/link.tif"
+expect_error 2 "link.tif" "symbolic link" -- "$glasspiv" render "$work/own/s.yaml" --setup -o "$work/own/link.tif"
+[ -L "$work/own/link.tif" ] && cmp -s "$work/own/cam.keep" "$work/own/cam.yaml" && ok || fail "render replaced a symbolic link"
+mkfifo "$work/own/fifo.tmap"
+expect_error 2 "fifo.tmap" "--map" "fifo" -- timeout 20 "$glasspiv" render "$work/own/s.yaml" --sheet-pattern grid -o "$work/own/x.tif" --map "$work/own/fifo.tmap"
+expect_error 2 "--map" "cannot be created" -- "$glasspiv" render "$work/own/s.yaml" --sheet-pattern grid -o "$work/own/x.tif" --map "$work/own/cam.keep/m.tmap"
+[ ! -s "$work/out" ] && ok || fail "a bad --map was reported after work began: $(cat "$work/out")"
+[ ! -e "$work/own/x.tif" ] && ok || fail "a refused render wrote its image"
+ln -s cam.keep "$work/own/link.yaml"
+expect_error 2 "link.yaml" "symbolic link" -- "$glasspiv" camera convert "$cams/example.yaml" "$work/own/link.yaml"
+ln -s cam.keep "$work/own/link.png"
+expect_error 2 "link.png" "--plot" "symbolic link" -- "$glasspiv" camera show "$work/own/cam.yaml" --plot "$work/own/link.png"
+mkdir -p "$work/demo_bad"
+mkfifo "$work/demo_bad/fifo"
+expect_error 2 "fifo" "-o" -- timeout 20 "$glasspiv" demo -o "$work/demo_bad"
 
 # Correct: frames rendered through the ball lens by the two-camera scene, then
 # corrected (camera grid, sheet grid, several cameras), resumed, sharded, and bad input.
@@ -169,7 +249,7 @@ grep -q "corrected 3 frames" "$work/out" && ok || fail "correct did not report 3
 ls "$work/corr" | grep -q '\.tmp' && fail "correct left temporary files" || ok
 rm "$work/corr/f2.tif"
 expect_ok "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/corr"
-grep -q "corrected 1 frames" "$work/out" && grep -q "2 already done" "$work/out" && grep -q "reused the correction operator" "$work/out" \
+grep -q "corrected 1 frame " "$work/out" && grep -q "2 already done" "$work/out" && grep -q "reused the correction operator" "$work/out" \
   && ok || fail "a rerun did not redo only the missing frame from the cached operator: $(cat "$work/out")"
 expect_ok "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/sheet" --grid sheet --method lsq --format float
 [ -s "$work/sheet/f1.tif" ] && [ -s "$work/sheet/sheet_grid.yaml" ] && ok || fail "correct --grid sheet wrote no frame or grid file"
@@ -195,6 +275,12 @@ expect_error 2 "--frame" "has 3" -- "$glasspiv" correct "$work/two.yaml" --frame
 expect_error 2 "input" -- "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames/f1.tif" -o "$work/frames"
 expect_error 2 "same output" -- "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames/f1.tif" "$work/side/f1.tif" -o "$work/bad"
 expect_error 2 "--shard" -- "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/bad" --shard 2/2
+expect_error 2 "--mm-per-px" "limit" -- timeout 20 "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/bad" --grid sheet --mm-per-px 1e-300
+[ "$(wc -c <"$work/err")" -lt 300 ] && ok || fail "a message printed a number of hundreds of digits: $(cat "$work/err")"
+expect_error 2 "--min-weight" "finite" -- "$glasspiv" coverage "$work/two.yaml" -o "$work/c.png" --min-weight nan
+mkdir -p "$work/m"
+cp "$work/frames/f1.tif" "$work/m/mask.tif"
+expect_error 2 "mask.tif" "never overwrites" -- "$glasspiv" correct "$work/two.yaml" --camera small "$work/m/mask.tif" -o "$work/m"
 head -c 3000 "$work/frames/f1.tif" >"$work/trunc.tif"
 expect_error 2 "trunc.tif" -- "$glasspiv" correct "$work/two.yaml" --camera small "$work/trunc.tif" -o "$work/bad"
 op=$(ls "$work/corr/cache/"*.gop | head -n 1)

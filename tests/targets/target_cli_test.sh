@@ -41,6 +41,25 @@ has err.txt "no PDF"
 expect 2 "$G" target print "$D/charuco_11x8_15mm.yaml"
 expect 2 "$G" target print "$D/charuco_11x8_15mm.yaml" --png p.png --dpi 0
 has err.txt "--dpi"
+# A failed print leaves nothing: the SVG is not written when the PNG cannot be made,
+# and an earlier SVG of that name is not replaced.
+sed 's/square_size_mm: 25/square_size_mm: 60/' "$D/chessboard_9x6.yaml" >big.yaml
+expect 2 "$G" target print big.yaml -o big.svg --png big.png --dpi 2400
+has err.txt "megapixels"
+[ ! -e big.svg ] && [ ! -e big.png ] || fail "a failed target print left big.svg or big.png"
+echo "earlier" >big.svg
+expect 2 "$G" target print big.yaml -o big.svg --png big.png --dpi 2400
+[ "$(cat big.svg)" = "earlier" ] || fail "a failed target print replaced big.svg"
+ls -a | grep -q '\.tmp' && fail "a failed target print left a temporary file"
+# Outputs: never the spec, never a link, never twice the same file.
+ln -s big.yaml link.svg
+expect 2 "$G" target print big.yaml -o link.svg
+has err.txt "never overwrites its inputs"
+echo "keep" >other.txt
+ln -s other.txt link2.svg
+expect 2 "$G" target print "$D/chessboard_9x6.yaml" -o link2.svg
+has err.txt "symbolic link"
+[ -L link2.svg ] && [ "$(cat other.txt)" = "keep" ] || fail "target print replaced a symbolic link"
 
 # --- a bad spec: one line naming the file and the field, status 2
 printf 'glasspiv_target: 1\nkind: charuco\nsquares: [11, 8]\nsquare_size_mm: 15\nmarker_size_mm: 15\ndictionary: DICT_5X5_100\n' >bad.yaml

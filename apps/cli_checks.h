@@ -1,0 +1,34 @@
+#pragma once
+// Checks every command shares: numbers on the command line, the work an option
+// implies, and the wording of counts and numbers in messages.
+#include <cstddef>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+namespace glasspiv {
+
+// Applied by main() to every option of every (sub)command, once all are
+// registered: a FLOAT value must be a finite number (no nan, inf, 1e999); an
+// INT or UINT value must be a whole number written in decimal; a UINT value may
+// not be negative (CLI11 would wrap -1 to 2^64 - 1). Also every --threads
+// option is bounded by kMaxThreads.
+void check_numeric_options(CLI::App& app);
+
+// Limits on the work an option's value implies, checked before the work.
+constexpr int kMaxThreads = 1024;                  // --threads
+constexpr double kMaxGridSamples = 1e6;            // camera show / compare: --step-px grid over the image
+constexpr double kMaxSheetPictureTexels = 1e8;     // render: built-in sheet pattern (--pattern-mm, --particle-diameter-mm)
+constexpr double kMaxSheetParticles = 1e7;         // render: --particle-density x the sheet's area
+
+// InputError("", field) if a grid of samples about step_px apart over a
+// width x height image (calib/pixel_grid.h over_image) has more than
+// kMaxGridSamples samples; the message gives the smallest step allowed.
+void check_sample_grid(const std::string& field, int width_px, int height_px, double step_px);
+
+// A number for a message: at most 6 significant digits ("1e+300", not 301 digits).
+std::string number(double value);
+// "1 solid", "3 solids" (plural: singular + "s" unless given).
+std::string count_of(std::size_t n, const std::string& singular, const std::string& plural = "");
+
+}  // namespace glasspiv
