@@ -1,0 +1,106 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer harnesses (clang 14, ASan + UBSan + libFuzzer) into
+# build-fuzz/ and runs each for a bounded time over its kept corpus
+# (tests/fuzz/corpus/<name>/, read only: new inputs go to
+# build-fuzz/fuzz-work/<name>/). docs/fuzzing.md has the details.
+#
+# Usage: tests/fuzz/fuzz.sh [harness...]     (default: all)
+# Environment:
+#   GLASSPIV_FUZZ_SECONDS  time per harness (default 20)
+#   GLASSPIV_FUZZ_JOBS     parallel fuzzing processes per harness (default 1)
+#   GLASSPIV_FUZZ_BUILD_DIR  (default build-fuzz)
+#   GLASSPIV_FUZZ_EXTRA    more libFuzzer flags, e.g. "-dict=... -max_len=4096"
+# A finding (crash, sanitizer report, leak, timeout, out-of-memory, an
+# exception other than InputError) ends the script with status 1; its
+# reproducer is left in build-fuzz/fuzz-artifacts/<name>/ and printed (base64).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+src=tests/fuzz
+build_dir="${GLASSPIV_FUZZ_BUILD_DIR:-build-fuzz}"
+seconds="${GLASSPIV_FUZZ_SECONDS:-20}"
+jobs="${GLASSPIV_FUZZ_JOBS:-1}"
+cxx="${GLASSPIV_FUZZ_CXX:-clang++-14}"
+cc="${GLASSPIV_FUZZ_CC:-clang-14}"
+
+all=(scene_yaml camera_glasspiv camera_opencv camera_mrcal camera_davis target_yaml
+     observations_yaml observations_json transport_map correction_operator image)
+if [ $# -gt 0 ]; then harnesses=("$@"); else harnesses=("${all[@]}"); fi
+
+bash scripts/install-deps.sh
+# clang and its sanitizer runtimes, only for fuzzing (the project itself builds with GCC).
+for p in clang-14 libclang-rt-14-dev; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends clang-14 libclang-rt-14-dev
+    break
+  fi
+done
+launcher=()
+if command -v ccache >/dev/null 2>&1; then
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+fi
+# -O1 -g: the sanitizers' usual setting; fast enough and readable stack traces.
+cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" \
+  -DCMAKE_C_COMPILER="$cc" -DCMAKE_CXX_COMPILER="$cxx" \
+  -DCMAKE_CXX_FLAGS_RELEASE="-O1 -g" -DCMAKE_C_FLAGS_RELEASE="-O1 -g" \
+  -DGLASSPIV_SANITIZE=ON -DGLASSPIV_FUZZ=ON -DGLASSPIV_BUILD_BENCH=OFF >/dev/null
+targets=()
+for h in "${harnesses[@]}"; do targets+=("fuzz_$h" "regress_$h"); done
+cmake --build "$build_dir" --parallel "$(nproc)" --target "${targets[@]}"
+
+asan_options="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:symbolize=1}"
+# Leaks inside third-party libraries are suppressed (tests/fuzz/lsan.supp); to
+# match them, the image harness needs full malloc stacks.
+export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/$src/lsan.supp}"
+full_malloc_stacks=" image "
+export ASAN_OPTIONS="$asan_options"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+# The kept corpus and reproducers first, under the same sanitizers.
+regress=()
+for h in "${harnesses[@]}"; do regress+=("fuzz_regress.$h"); done
+ctest --test-dir "$build_dir" --output-on-failure --parallel "$(nproc)" \
+  -R "^($(IFS='|'; echo "${regress[*]}"))\$"
+status=0
+summary=()
+for h in "${harnesses[@]}"; do
+  work="$build_dir/fuzz-work/$h"
+  artifacts="$build_dir/fuzz-artifacts/$h"
+  log="$build_dir/fuzz-logs/$h.log"
+  mkdir -p "$work" "$artifacts" "$(dirname "$log")"
+  corpora=("$src/corpus/$h")
+  [ -d "$src/crashes/$h" ] && corpora+=("$src/crashes/$h")
+  extra=()
+  [ -f "$src/dict/$h.dict" ] && extra+=(-dict="$src/dict/$h.dict")
+  [ "$jobs" -gt 1 ] && extra+=(-jobs="$jobs" -workers="$jobs")
+  export ASAN_OPTIONS="$asan_options"
+  [[ "$full_malloc_stacks" == *" $h "* ]] && export ASAN_OPTIONS="$asan_options:fast_unwind_on_malloc=0"
+  echo "== fuzz_$h: ${seconds} s"
+  set +e
+  # shellcheck disable=SC2086
+  "$build_dir/tests/fuzz/fuzz_$h" "$work" "${corpora[@]}" "${extra[@]}" \
+    -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
+    -artifact_prefix="$artifacts/" ${GLASSPIV_FUZZ_EXTRA:-} >"$log" 2>&1
+  rc=$?
+  set -e
+  [ "$jobs" -gt 1 ] && cat fuzz-*.log >>"$log" 2>/dev/null && rm -f fuzz-*.log
+  last=$(grep -E '^#[0-9]+' "$log" | tail -1 || true)
+  execs=$(grep -E 'stat::number_of_executed_units' "$log" | tail -1 | awk '{print $2}')
+  speed=$(grep -E 'stat::average_exec_per_sec' "$log" | tail -1 | awk '{print $2}')
+  cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
+  ft=$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' <<<"$last")
+  summary+=("$(printf '%-22s rc=%-3s execs=%-9s exec/s=%-7s cov=%-6s ft=%s' "$h" "$rc" "${execs:-?}" "${speed:-?}" "${cov:-?}" "${ft:-?}")")
+  if [ "$rc" -ne 0 ]; then
+    status=1
+    echo "FINDING in fuzz_$h (exit $rc); the end of its log:"
+    tail -n 60 "$log"
+    for f in "$artifacts"/*; do
+      [ -f "$f" ] || continue
+      echo "reproducer $f ($(stat -c %s "$f") bytes), base64:"
+      base64 -w 0 "$f" | head -c 20000
+      echo
+    done
+  fi
+done
+echo "== fuzz summary (${seconds} s per harness)"
+printf '%s\n' "${summary[@]}"
+exit "$status"

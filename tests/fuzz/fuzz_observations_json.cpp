@@ -1,0 +1,12 @@
+// Fuzz harness: the observations file reader, JSON form
+// (targets/observations_io.h, parse_observations).
+#include "fuzz_common.h"
+#include "targets/observations_io.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  glasspiv_fuzz::returns_or_refuses("parse_observations(json)", [&] {
+    glasspiv::parse_observations(glasspiv_fuzz::as_text(data, size), glasspiv::ObservationsFormat::json,
+                                 "fuzz_input.json");
+  });
+  return 0;
+}
