@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "calib/io/camera_file.h"
 #include "util/input_error.h"
@@ -232,8 +233,44 @@ class Reader {
   int added_lines_;
 };
 
+// OpenCV 4.6's FileStorage parser can loop forever on malformed YAML (the
+// reproducers in tests/fuzz/crashes/camera_opencv/): it only ever sees one
+// document that yaml-cpp has parsed as a well-formed mapping first. OpenCV's
+// "%YAML:1.0" line is its own spelling of the directive, not YAML's, so it is
+// left out; a second document is refused before either parser sees it
+// (yaml-cpp's LoadAll itself runs away on some damaged multi-document texts).
+void check_one_mapping(std::string_view contents, const std::string& path) {
+  std::string yaml(contents);
+  int skipped_lines = 0;
+  const std::size_t first = yaml.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && yaml.compare(first, 6, "%YAML:") == 0) {
+    const std::size_t eol = yaml.find('\n', first);
+    yaml = eol == std::string::npos ? std::string() : yaml.substr(eol + 1);
+    skipped_lines = 1;
+  }
+  bool content = false;
+  int line = skipped_lines;
+  for (std::size_t pos = 0; pos < yaml.size(); ++line) {
+    const std::size_t eol = std::min(yaml.find('\n', pos), yaml.size());
+    const std::string_view l(yaml.data() + pos, eol - pos);
+    const bool marker = l.rfind("---", 0) == 0 || l.rfind("...", 0) == 0;
+    if (marker && content)
+      throw InputError(path, "", fmt::format("line {}: a second YAML document; a camera file holds one", line + 1));
+    if (!marker && l.find_first_not_of(" \t\r") != std::string_view::npos && l[l.find_first_not_of(" \t\r")] != '#')
+      content = true;
+    pos = eol + 1;
+  }
+  try {
+    if (!YAML::Load(yaml).IsMap())
+      throw InputError(path, "", "expected a mapping of OpenCV FileStorage fields (camera_matrix, ...)");
+  } catch (const YAML::Exception& e) {
+    throw InputError(path, "", fmt::format("malformed YAML, line {}: {}", e.mark.line + 1 + skipped_lines, e.msg));
+  }
+}
+
 std::vector<Camera> parse(std::string_view contents, const std::string& path) {
   check_nesting_depth(contents, path);
+  check_one_mapping(contents, path);
   std::string text(contents);
   if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);
   // In memory, FileStorage recognises YAML by its %YAML directive only.
