@@ -21,6 +21,7 @@
 
 #include <unistd.h>
 
+#include "tests/temp_dir.h"
 #include "correct/correction_operator_file.h"
 #include "render/transport_map_file.h"
 #include "util/atomic_file.h"
@@ -52,41 +53,6 @@ Offsets offsets_of(const CorrectionOperator& op) {
   return offsets_of(op.pixel_count(), op.entry_count(), op.grid.cell_count());
 }
 
-// A fresh folder per test, removed afterwards.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("glasspiv_cof_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-  std::vector<std::string> entries() const {
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(path_)) names.push_back(e.path().filename().string());
-    return names;
-  }
-
- private:
-  fs::path path_;
-};
-
-template <typename T>
-void poke(std::string& bytes, std::size_t at, T v) {
-  std::memcpy(&bytes[at], &v, sizeof v);
-}
-template <typename T>
-T peek(const std::string& bytes, std::size_t at) {
-  T v;
-  std::memcpy(&v, bytes.data() + at, sizeof v);
-  return v;
-}
 
 // After patching the payload: a valid checksum again, so that the later checks are reached.
 void reseal(std::string& bytes) {
@@ -183,7 +149,7 @@ void expect_identical(const CorrectionOperator& a, const CorrectionOperator& b) 
 // ------------------------------------------------------------------ round trip
 
 TEST(CorrectionOperatorFile, RoundTripIsBitIdenticalAndFollowsTheDocumentedLayout) {
-  TempDir dir;
+  TempDir dir("glasspiv_cof");
   const CorrectionOperator op = small_operator();
   ASSERT_EQ(op.entry_count(), 21u);
   ASSERT_EQ(op.cell_offsets.size(), 21u);  // derived by finish_correction_operator
@@ -236,7 +202,7 @@ TEST(CorrectionOperatorFile, RoundTripIsBitIdenticalAndFollowsTheDocumentedLayou
 }
 
 TEST(CorrectionOperatorFile, RoundTripOfOnePixelWithoutEntries) {
-  TempDir dir;
+  TempDir dir("glasspiv_cof");
   CorrectionOperator tiny;
   tiny.width = tiny.height = 1;
   tiny.grid.cols = tiny.grid.rows = 1;
@@ -253,7 +219,7 @@ TEST(CorrectionOperatorFile, RoundTripOfOnePixelWithoutEntries) {
 // ------------------------------------------------------------------ writer
 
 TEST(CorrectionOperatorFile, WriterRefusesAnInconsistentOperator) {
-  TempDir dir;
+  TempDir dir("glasspiv_cof");
   const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
   const std::map<std::string, std::function<void(CorrectionOperator&)>> breakages = {
       {"short value", [](CorrectionOperator& op) { op.value.pop_back(); }},
@@ -369,7 +335,7 @@ TEST(CorrectionOperatorFingerprint, HashesEveryFieldOfTheInputStructs) {
 // ------------------------------------------------------------------ read errors
 
 TEST(CorrectionOperatorFile, ReadErrorsNameThePathAndTheField) {
-  TempDir dir;
+  TempDir dir("glasspiv_cof");
   const CorrectionOperator op = small_operator();
   const std::string path = dir.file("op.cop");
   write_correction_operator(path, op, 42);
@@ -478,7 +444,7 @@ TEST(CorrectionOperatorFile, ReadErrorsNameThePathAndTheField) {
 }
 
 TEST(CorrectionOperatorFile, ErrorMessagesSayWhatIsWrong) {
-  TempDir dir;
+  TempDir dir("glasspiv_cof");
   const CorrectionOperator op = small_operator();
   const std::string path = dir.file("op.cop");
   write_correction_operator(path, op, 1);
@@ -508,7 +474,7 @@ TEST(CorrectionOperatorFile, ErrorMessagesSayWhatIsWrong) {
 // ------------------------------------------------------------------ cache lookup
 
 TEST(CorrectionOperatorCache, LoadsOnlyAnIntactOperatorOfTheSameSetup) {
-  TempDir dir;
+  TempDir dir("glasspiv_cof");
   const CorrectionOperator op = small_operator();
   const FingerprintInputs in;
   const std::uint64_t fp = in.fingerprint();
@@ -566,7 +532,7 @@ TEST(CorrectionOperatorCache, LoadsOnlyAnIntactOperatorOfTheSameSetup) {
 // A write that fails half way (file size limit: the write gets EFBIG) throws,
 // leaves the existing file as it was and no temporary behind.
 TEST(CorrectionOperatorFile, FailedWriteLeavesTheExistingFileUntouched) {
-  TempDir dir;
+  TempDir dir("glasspiv_cof");
   const std::string path = dir.file("keep.cop");
   const CorrectionOperator small = small_operator();
   write_correction_operator(path, small, 5);

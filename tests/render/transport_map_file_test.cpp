@@ -22,6 +22,7 @@
 
 #include <unistd.h>
 
+#include "tests/temp_dir.h"
 #include "render/transport_map_file.h"
 #include "tests/render/test_maps.h"
 #include "util/input_error.h"
@@ -34,31 +35,6 @@ constexpr std::size_t kHeaderBytes = 144;
 
 std::size_t padded8(std::size_t bytes) { return (bytes + 7) / 8 * 8; }
 
-// A fresh folder per test, removed afterwards.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("glasspiv_tmf_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-  std::vector<std::string> entries() const {
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(path_)) names.push_back(e.path().filename().string());
-    return names;
-  }
-
- private:
-  fs::path path_;
-};
-
 std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
@@ -69,10 +45,6 @@ void spill(const std::string& path, const std::string& bytes) {
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
-template <typename T>
-void poke(std::string& bytes, std::size_t at, T v) {
-  std::memcpy(&bytes[at], &v, sizeof v);
-}
 
 // After patching the payload: a valid checksum again, so that the later checks are reached.
 void reseal(std::string& bytes) {
@@ -175,7 +147,7 @@ void expect_identical(const TransportMap& a, const TransportMap& b) {
 // ------------------------------------------------------------------ round trip
 
 TEST(TransportMapFile, RoundTripIsBitExact) {
-  TempDir dir;
+  TempDir dir("glasspiv_tmf");
   const Inputs in = sphere_inputs();
   const TransportMap map = map_with_footprint(in);
   // The map is a real one: refracted and reflected crossings, pixels with and without the sphere.
@@ -212,7 +184,7 @@ TEST(TransportMapFile, RoundTripIsBitExact) {
 }
 
 TEST(TransportMapFile, RoundTripWithoutFootprintAndWithOnePixel) {
-  TempDir dir;
+  TempDir dir("glasspiv_tmf");
   const Inputs in = sphere_inputs();
   TransportMap map = small_map(in);
   for (auto* v : {&map.ds_dcol, &map.ds_drow, &map.dt_dcol, &map.dt_drow}) v->clear();
@@ -236,7 +208,7 @@ TEST(TransportMapFile, RoundTripWithoutFootprintAndWithOnePixel) {
 }
 
 TEST(TransportMapFile, WriterRefusesAnInconsistentMap) {
-  TempDir dir;
+  TempDir dir("glasspiv_tmf");
   const TransportMap good = small_map(sphere_inputs());
   const std::map<std::string, std::function<void(TransportMap&)>> breakages = {
       {"short s_mm", [](TransportMap& m) { m.s_mm.pop_back(); }},
@@ -374,7 +346,7 @@ TEST(TransportMapFingerprint, HashesEveryFieldOfTheInputStructs) {
 // ------------------------------------------------------------------ cache lookup
 
 TEST(TransportMapCache, LoadsOnlyAnIntactMapOfTheSameSetup) {
-  TempDir dir;
+  TempDir dir("glasspiv_tmf");
   const Inputs in = sphere_inputs();
   const TransportMap map = map_with_footprint(in);
   const std::uint64_t fp = in.fingerprint();
@@ -424,7 +396,7 @@ TEST(TransportMapCache, LoadsOnlyAnIntactMapOfTheSameSetup) {
 // ------------------------------------------------------------------ read errors
 
 TEST(TransportMapFile, ReadErrorsNameThePathAndTheField) {
-  TempDir dir;
+  TempDir dir("glasspiv_tmf");
   const TransportMap map = map_with_footprint(sphere_inputs());
   const std::string path = dir.file("m.tmap");
   write_transport_map(path, map, 42);
@@ -534,7 +506,7 @@ TEST(TransportMapFile, ReadErrorsNameThePathAndTheField) {
 // A write that fails half way (file size limit: the write gets EFBIG) throws,
 // leaves the existing file as it was and no temporary behind.
 TEST(TransportMapFile, FailedWriteLeavesTheExistingFileUntouched) {
-  TempDir dir;
+  TempDir dir("glasspiv_tmf");
   const std::string path = dir.file("keep.tmap");
   TransportMap tiny;
   tiny.width = tiny.height = 1;
