@@ -12,6 +12,7 @@
 #include <unistd.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "tests/hand_made_images.h"
 #include "targets/photo_io.h"
 #include "util/atomic_file.h"
 #include "util/input_error.h"
@@ -20,50 +21,6 @@ namespace glasspiv {
 namespace {
 namespace fs = std::filesystem;
 
-// Hand-made files: a PNG or a baseline TIFF (8-bit gray) whose header states any size.
-std::uint32_t crc32_of(const std::string& bytes) {
-  std::uint32_t crc = 0xffffffffu;
-  for (unsigned char c : bytes) {
-    crc ^= c;
-    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
-  }
-  return ~crc;
-}
-std::string big_endian(std::uint32_t v) { return {char(v >> 24), char(v >> 16), char(v >> 8), char(v)}; }
-std::string png_chunk(const std::string& type, const std::string& data) {
-  return big_endian(std::uint32_t(data.size())) + type + data + big_endian(crc32_of(type + data));
-}
-std::string png_claiming(std::uint32_t width, std::uint32_t height) {
-  const std::string ihdr = big_endian(width) + big_endian(height) + std::string{8, 0, 0, 0, 0};
-  const std::string idat("\x78\x9c\x63\x00\x00\x00\x01\x00\x01", 9);  // zlib of one zero byte
-  return std::string("\x89PNG\r\n\x1a\n", 8) + png_chunk("IHDR", ihdr) + png_chunk("IDAT", idat) +
-         png_chunk("IEND", "");
-}
-std::string little_endian(std::uint32_t v, int bytes) {
-  std::string s;
-  for (int i = 0; i < bytes; ++i) s += char(v >> (8 * i));
-  return s;
-}
-std::string tiff_claiming(std::uint32_t width, std::uint32_t height) {
-  const std::string data(16, '\0');
-  const std::vector<std::pair<std::uint16_t, std::uint32_t>> longs = {
-      {256, width}, {257, height}, {273, 8}, {278, height}, {279, std::uint32_t(data.size())}};
-  const std::vector<std::pair<std::uint16_t, std::uint32_t>> shorts = {{258, 8}, {259, 1}, {262, 1}, {277, 1}};
-  std::vector<std::string> entries;  // TIFF wants them sorted by tag
-  for (const auto& [tag, v] : longs) entries.push_back(little_endian(tag, 2) + little_endian(4, 2) + little_endian(1, 4) + little_endian(v, 4));
-  for (const auto& [tag, v] : shorts)
-    entries.push_back(little_endian(tag, 2) + little_endian(3, 2) + little_endian(1, 4) + little_endian(v, 2) + std::string(2, '\0'));
-  std::sort(entries.begin(), entries.end(), [](const std::string& a, const std::string& b) {
-    return (std::uint8_t(a[1]) << 8 | std::uint8_t(a[0])) < (std::uint8_t(b[1]) << 8 | std::uint8_t(b[0]));
-  });
-  std::string tiff = std::string("II*\0", 4) + little_endian(8 + std::uint32_t(data.size()), 4) + data +
-                     little_endian(std::uint32_t(entries.size()), 2);
-  for (const std::string& e : entries) tiff += e;
-  return tiff + little_endian(0, 4);
-}
-void write_bytes(const std::string& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary) << bytes;
-}
 
 // Expects an InputError naming `path`, on one line; returns its message.
 std::string input_error_of(const std::string& path) {
