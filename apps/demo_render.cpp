@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "apps/render_scene.h"
+#include "align/prepared_scene.h"
 #include "render/forward_render.h"
 #include "render/setup_render.h"
 #include "render/sheet_pattern.h"

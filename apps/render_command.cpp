@@ -10,7 +10,7 @@
 #include "apps/cli_checks.h"
 #include "apps/cli_files.h"
 #include "apps/commands.h"
-#include "apps/render_scene.h"
+#include "align/prepared_scene.h"
 #include "render/forward_render.h"
 #include "render/setup_render.h"
 #include "render/sheet_pattern.h"

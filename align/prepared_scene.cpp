@@ -1,8 +1,8 @@
-#include "apps/render_scene.h"
+#include "align/prepared_scene.h"
 
 #include <fmt/format.h>
 
-#include "apps/cli_files.h"
+#include "align/scene_fiducials.h"
 #include "render/scene_yaml.h"
 #include "targets/target_image.h"
 #include "targets/target_yaml.h"
@@ -41,11 +41,8 @@ PreparedScene prepare_scene(const std::string& path, const std::string& camera_n
       ps.rectangle_textures.emplace_back();
       continue;
     }
-    if (lower_extension(r.texture) == ".yaml" || lower_extension(r.texture) == ".yml") {
-      // A target spec: the board as printed (white margin included), at true
-      // scale, centred on the rectangle; 20 texels per mm keep the edges sharp.
-      const TargetSpec spec = read_target_yaml(r.texture);
-      const TargetRender board = render_target(spec, 20.0, default_margin_mm(spec));
+    if (is_target_file(r.texture)) {
+      const TargetRender board = rectangle_target_texture(read_target_yaml(r.texture));
       cv::Mat values;
       board.image.convertTo(values, CV_32F, 1.0 / 255);
       ps.rectangle_textures.push_back(

@@ -1,7 +1,9 @@
 #pragma once
-// A scene file made ready for the render commands: read and validated, one of
-// its cameras chosen, converted for the tracer, the rectangles' textures
-// loaded. Errors are InputErrors naming the scene file and field.
+// A scene file made ready for rendering the setup and aligning it: read and
+// validated, one of its cameras chosen, converted for the tracer, the
+// rectangles' textures loaded (a target spec as the board printed at true scale,
+// align/scene_fiducials.h places its corners). Errors are InputErrors naming
+// the scene file and field.
 #include <memory>
 #include <string>
 #include <vector>
