@@ -1,20 +1,20 @@
 #include "calib/fit/intrinsic_fit.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <memory>
-#include <mutex>
+#include <optional>
 #include <thread>
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
-#include <glog/logging.h>
-#include <opencv2/calib3d.hpp>
-#include <opencv2/core.hpp>
 
+#include "calib/fit/board_pose.h"
+#include "calib/fit/ceres_logging.h"
+#include "calib/fit/marginal_covariance.h"
+#include "calib/fit/outlier_rounds.h"
 #include "calib/fit/reprojection_cost.h"
 #include "util/input_error.h"
 #include "util/stopwatch.h"
@@ -26,20 +26,6 @@ std::string format_number(const char* format, double value) {
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, format, value);
   return buffer;
-}
-
-// Ceres logs through glog (warnings such as "Linear solver failure", errors
-// such as "Residual and Jacobian evaluation failed", and glog's own "Logging
-// before InitGoogleLogging" line) straight to stderr; the fit reports through
-// its result and InputError only. Only FATAL (a crash anyway) stays.
-void silence_ceres_logging() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    FLAGS_minloglevel = std::max<int>(FLAGS_minloglevel, google::GLOG_FATAL);
-    FLAGS_stderrthreshold = std::max<int>(FLAGS_stderrthreshold, google::GLOG_FATAL);
-    FLAGS_logtostderr = false;
-    FLAGS_alsologtostderr = false;
-  });
 }
 
 // "0-12", "1, 4, 7-9": view indices, ascending, runs compressed.
@@ -71,7 +57,7 @@ struct FitCorner {
 // A view with enough corners for a homography and a pose.
 struct UsedView {
   int view = 0;
-  cv::Matx33d homography;
+  Eigen::Matrix3d homography;
   std::array<double, kPoseParameterCount> pose{};  // angle-axis, translation mm
   bool active = true;                              // false once outlier rejection emptied it
 };
@@ -85,8 +71,8 @@ double homography_distance_px(const UsedView& a, const UsedView& b, const Observ
     double sum = 0;
     int n = 0;
     for (const CornerObservation& c : observations.views[corners_of.view].corners) {
-      const cv::Vec3d p(c.board_point_mm.x(), c.board_point_mm.y(), 1.0);
-      const cv::Vec3d qa = a.homography * p, qb = b.homography * p;
+      const Eigen::Vector3d p(c.board_point_mm.x(), c.board_point_mm.y(), 1.0);
+      const Eigen::Vector3d qa = a.homography * p, qb = b.homography * p;
       const double dx = qa[0] / qa[2] - qb[0] / qb[2], dy = qa[1] / qa[2] - qb[1] / qb[2];
       sum += dx * dx + dy * dy;
       ++n;
@@ -147,9 +133,7 @@ bool closed_form_focal(const std::vector<UsedView>& views, double cx, double cy,
   Eigen::MatrixXd a(2 * views.size(), 2);
   Eigen::VectorXd b(2 * views.size());
   for (std::size_t i = 0; i < views.size(); ++i) {
-    Eigen::Matrix3d h;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) h(r, c) = views[i].homography(r, c);
+    Eigen::Matrix3d h = views[i].homography;
     h.row(0) -= cx * h.row(2);
     h.row(1) -= cy * h.row(2);
     const Eigen::Vector3d h1 = h.col(0).normalized(), h2 = h.col(1).normalized();
@@ -176,17 +160,7 @@ bool closed_form_focal(const std::vector<UsedView>& views, double cx, double cy,
 }
 
 // The covariance of the tangent-space intrinsics with the board poses
-// marginalised: S = sum over views of (Jc^T Jc - Jc^T Jp (Jp^T Jp)^-1 Jp^T Jc),
-// covariance sigma^2 S^-1, computed Jacobi-scaled (S -> D S D with D =
-// diag(S)^-1/2, so that the condition number compares parameters of any units).
-// Directions whose eigenvalue falls below kMinReciprocalCondition * lambda_max
-// count as undetermined: they are left out of the inverse (a pseudo-inverse).
-struct MarginalCovariance {
-  Eigen::MatrixXd covariance;       // empty when S has no positive eigenvalue
-  double reciprocal_condition = 0;  // lambda_min / lambda_max of D S D
-  Eigen::MatrixXd undetermined;     // unit (scaled) eigenvectors of the undetermined directions
-};
-
+// marginalised (calib/fit/marginal_covariance.h), at the current parameters.
 MarginalCovariance marginal_intrinsics_covariance(ceres::Problem& problem, double* intrinsics,
                                                   const std::vector<UsedView>& views,
                                                   const std::vector<FitCorner>& corners, double sigma_px,
@@ -201,54 +175,19 @@ MarginalCovariance marginal_intrinsics_covariance(ceres::Problem& problem, doubl
       active_slot[s] = active++;
     }
   // Residual blocks grouped by view (corners are stored view by view).
-  std::vector<int> rows_per_slot(views.size(), 0);
+  std::vector<int> rows_per_active(active, 0);
   for (const FitCorner& c : corners)
     if (c.block) {
       evaluate.residual_blocks.push_back(c.block);
-      rows_per_slot[c.slot] += 2;
+      rows_per_active[active_slot[c.slot]] += 2;
     }
   evaluate.num_threads = num_threads;
   ceres::CRSMatrix jacobian;
-  MarginalCovariance out;
   // Fails when a corner lies behind the camera at the fitted poses.
-  if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian)) return out;
+  if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian)) return {};
   const int m = jacobian.num_cols - kPoseParameterCount * active;
-  if (m <= 0 || jacobian.num_rows != static_cast<int>(jacobian.rows.size()) - 1) return out;
-
-  Eigen::MatrixXd s = Eigen::MatrixXd::Zero(m, m);
-  int row = 0;
-  for (std::size_t slot = 0; slot < views.size(); ++slot) {
-    if (active_slot[slot] < 0 || rows_per_slot[slot] == 0) continue;
-    const int n = rows_per_slot[slot];
-    Eigen::MatrixXd jc = Eigen::MatrixXd::Zero(n, m), jp = Eigen::MatrixXd::Zero(n, kPoseParameterCount);
-    const int pose_column = m + kPoseParameterCount * active_slot[slot];
-    for (int r = 0; r < n; ++r, ++row)
-      for (int k = jacobian.rows[row]; k < jacobian.rows[row + 1]; ++k) {
-        const int c = jacobian.cols[k];
-        if (c < m)
-          jc(r, c) = jacobian.values[k];
-        else if (c >= pose_column && c < pose_column + kPoseParameterCount)
-          jp(r, c - pose_column) = jacobian.values[k];
-      }
-    const Eigen::MatrixXd b = jc.transpose() * jp;
-    const Eigen::Matrix<double, 6, 6> pp = jp.transpose() * jp;
-    s += jc.transpose() * jc - b * pp.ldlt().solve(b.transpose());
-  }
-  const Eigen::VectorXd d = s.diagonal().cwiseMax(std::numeric_limits<double>::min()).cwiseSqrt().cwiseInverse();
-  const Eigen::MatrixXd scaled = d.asDiagonal() * s * d.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
-  const Eigen::VectorXd lambda = eigen.eigenvalues();
-  if (!(scaled.allFinite() && lambda.allFinite() && lambda(m - 1) > 0)) return out;
-  out.reciprocal_condition = std::max(0.0, lambda(0) / lambda(m - 1));
-  int undetermined = 0;
-  while (undetermined < m && lambda(undetermined) < kMinReciprocalCondition * lambda(m - 1)) ++undetermined;
-  out.undetermined = eigen.eigenvectors().leftCols(undetermined);
-  Eigen::VectorXd inverse_lambda = lambda.cwiseInverse();
-  inverse_lambda.head(undetermined).setZero();
-  const Eigen::MatrixXd inverse = eigen.eigenvectors() * inverse_lambda.asDiagonal() * eigen.eigenvectors().transpose();
-  out.covariance = sigma_px * sigma_px * d.asDiagonal() * inverse * d.asDiagonal();
-  if (!out.covariance.allFinite() || (out.covariance.diagonal().array() < 0).any()) out.covariance.resize(0, 0);
-  return out;
+  return marginal_covariance(jacobian, m, std::vector<int>(active, kPoseParameterCount), rows_per_active, sigma_px,
+                             kMinReciprocalCondition);
 }
 
 // Beyond this fit RMS the corners are not one board seen by one camera (a
@@ -311,19 +250,14 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
                                                   std::to_string(kMinCornersPerView)});
       continue;
     }
-    std::vector<cv::Point2d> board, pixels;
-    for (const CornerObservation& c : corners) {
-      board.emplace_back(c.board_point_mm.x(), c.board_point_mm.y());
-      pixels.emplace_back(c.pixel_px.x(), c.pixel_px.y());
-    }
-    const cv::Mat h = cv::findHomography(board, pixels, 0);
-    if (h.empty() || !cv::checkRange(h) || std::abs(cv::determinant(h)) < 1e-300) {
+    const std::optional<Eigen::Matrix3d> h = board_homography(corners);
+    if (!h) {
       skipped.push_back({static_cast<int>(v), "its corners give no homography (collinear or repeated points)"});
       continue;
     }
     UsedView used;
     used.view = static_cast<int>(v);
-    used.homography = cv::Matx33d(h);
+    used.homography = *h;
     views.push_back(used);
   }
   const auto check_view_count = [&](std::size_t count, const char* when) {
@@ -367,31 +301,19 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
 
   // --- Initial board poses (IPPE on the undistorted model unless a camera was given).
   {
-    const cv::Matx33d k(intrinsics[0], 0, intrinsics[2], 0, intrinsics[1], intrinsics[3], 0, 0, 1);
     std::vector<double> distortion;
     if (options.initial_camera && distortion_count > 0) distortion.assign(intrinsics.begin() + 4, intrinsics.end());
+    const CameraModel start(width, height, intrinsics[0], intrinsics[1], intrinsics[2], intrinsics[3], distortion);
     std::vector<UsedView> posed;
     for (UsedView& used : views) {
-      std::vector<cv::Point3d> board;
-      std::vector<cv::Point2d> pixels;
-      for (const CornerObservation& c : observations.views[used.view].corners) {
-        board.emplace_back(c.board_point_mm.x(), c.board_point_mm.y(), 0.0);
-        pixels.emplace_back(c.pixel_px.x(), c.pixel_px.y());
-      }
-      cv::Vec3d rvec, tvec;
-      bool ok = false;
-      try {
-        ok = cv::solvePnP(board, pixels, k, distortion, rvec, tvec, false, cv::SOLVEPNP_IPPE);
-      } catch (const cv::Exception&) {
-        ok = false;
-      }
-      if (!ok || !cv::checkRange(rvec) || !cv::checkRange(tvec) || !(tvec[2] > 0)) {
+      const std::optional<BoardPose> pose = board_pose_ippe(start, observations.views[used.view].corners);
+      if (!pose) {
         skipped.push_back({used.view, "no board pose could be found from its corners"});
         continue;
       }
       for (int i = 0; i < 3; ++i) {
-        used.pose[i] = rvec[i];
-        used.pose[3 + i] = tvec[i];
+        used.pose[i] = pose->rvec(i);
+        used.pose[3 + i] = pose->translation_mm(i);
       }
       posed.push_back(used);
     }
@@ -538,51 +460,43 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
                         constant.empty() ? nullptr : new ceres::SubsetManifold(intrinsic_count, constant));
   }
 
-  // --- Solve, drop outliers, repeat.
-  for (int round = 0;; ++round) {
+  // --- Solve, drop outliers, repeat (calib/fit/outlier_rounds.h).
+  const auto solve = [&](int round) {
     // Later rounds start at the optimum of a problem with a few corners more:
     // near-Gauss-Newton steps (a wide initial trust region) finish them in ~2
     // iterations instead of ~12 crawling along the rational models' valleys.
     if (round > 0) solver_options.initial_trust_region_radius = 1e12;
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
-    fit.rounds = round + 1;
     add_summary(summary);
     for (double p : intrinsics)
       if (!std::isfinite(p))
         throw InputError("", "views",
                          "the fit diverged (non-finite intrinsics); check the corner ids and board points");
     update_residuals();
-    if (options.outlier_k == 0 || round + 1 >= kMaxOutlierRounds) break;
-
-    // The outlier set is recomputed from every corner at each round, so corners
-    // that only looked bad while the outliers still pulled the fit come back.
-    std::vector<double> norms;
+  };
+  // The corners of the views that still have a pose, in storage order.
+  const auto candidates = [&] {
+    std::vector<OutlierCandidate> out;
     for (const FitCorner& c : corners)
-      if (views[c.slot].active) norms.push_back(c.residual_px.norm());
-    std::nth_element(norms.begin(), norms.begin() + norms.size() / 2, norms.end());
-    // For Gaussian noise of sigma per axis, |r| is Rayleigh: median = sigma sqrt(2 ln 2).
-    const double robust_sigma = norms[norms.size() / 2] / std::sqrt(2 * std::log(2.0));
-    const double threshold = std::max(options.outlier_k * robust_sigma, kMinOutlierThresholdPx);
-    int dropped = 0, readmitted = 0;
+      if (views[c.slot].active) out.push_back({c.residual_px.norm(), c.block == nullptr});
+    return out;
+  };
+  const auto apply = [&](const OutlierVerdict& verdict) {
     std::vector<int> inliers_per_slot(views.size(), 0);
+    std::size_t i = 0;
     for (FitCorner& c : corners) {
       if (!views[c.slot].active) continue;
-      const bool outlier = !(c.residual_px.norm() <= threshold);
+      const bool outlier = verdict.outlier[i++];
       if (outlier && c.block) {
         problem.RemoveResidualBlock(c.block);
         c.block = nullptr;
-        ++dropped;
       } else if (!outlier && !c.block) {
         c.block = problem.AddResidualBlock(c.cost.get(), nullptr, intrinsics.data(), views[c.slot].pose.data());
-        ++readmitted;
       }
       c.outlier = outlier;
       if (!outlier) ++inliers_per_slot[c.slot];
     }
-    fit.dropped_per_round.push_back(dropped);
-    fit.readmitted_per_round.push_back(readmitted);
-    fit.threshold_px_per_round.push_back(threshold);
     // A view left with too few corners loses its pose (it would be undetermined).
     for (std::size_t slot = 0; slot < views.size(); ++slot) {
       if (!views[slot].active || inliers_per_slot[slot] >= kMinCornersPerView) continue;
@@ -597,11 +511,16 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
       skipped.push_back({views[slot].view,
                          "fewer than " + std::to_string(kMinCornersPerView) + " corners left after outlier rejection"});
     }
-    if (dropped == 0 && readmitted == 0) break;
+    if (!verdict.changed()) return;
     int active = 0;
     for (const UsedView& v : views) active += v.active;
     check_view_count(static_cast<std::size_t>(active), " after outlier rejection");
-  }
+  };
+  const OutlierRoundsLog log = run_outlier_rounds(options.outlier_k, solve, candidates, apply);
+  fit.rounds = log.rounds;
+  fit.dropped_per_round = log.dropped_per_round;
+  fit.readmitted_per_round = log.readmitted_per_round;
+  fit.threshold_px_per_round = log.threshold_px_per_round;
   std::sort(skipped.begin(), skipped.end(), [](const SkippedView& a, const SkippedView& b) { return a.view < b.view; });
 
   // --- Statistics.

@@ -29,6 +29,8 @@
 #include <Eigen/Core>
 
 #include "calib/camera_model.h"
+#include "calib/fit/marginal_covariance.h"
+#include "calib/fit/outlier_rounds.h"
 #include "calib/observations.h"
 #include "calib/rigid_transform.h"
 
@@ -134,21 +136,16 @@ struct IntrinsicFit {
   double initial_rms_px = 0;  // after initialisation, before the first solve
 };
 
-constexpr int kMaxOutlierRounds = 10;
+// kMaxOutlierRounds and kMinOutlierThresholdPx: calib/fit/outlier_rounds.h.
 constexpr int kMinCornersPerView = 4;  // a homography and a board pose need 4
-// The outlier threshold never goes below this: on noise-free data the residuals
-// are round-off, and no corner detector is this precise anyway.
-constexpr double kMinOutlierThresholdPx = 0.01;
 // The focal length counts as unobservable when its 1-sigma exceeds this fraction.
 constexpr double kMaxRelativeFocalSigma = 0.10;
 // Directions of the (Jacobi-scaled) reduced normal matrix with eigenvalues below
-// this fraction of the largest are undetermined: if fx or fy takes part the fit
-// is refused as "nearly fronto-parallel" (field "views"); otherwise the
-// distortion coefficients involved are listed in undetermined_parameters.
-constexpr double kMinReciprocalCondition = 1e-13;
-// The observability check uses max(sigma_px, this): noise-free data must not
-// make a degenerate set of views look determined.
-constexpr double kObservabilitySigmaFloorPx = 0.05;
+// kMinReciprocalCondition times the largest are undetermined: if fx or fy takes
+// part the fit is refused as "nearly fronto-parallel" (field "views"); otherwise
+// the distortion coefficients involved are listed in undetermined_parameters.
+// The observability check uses max(sigma_px, kObservabilitySigmaFloorPx). Both
+// constants: calib/fit/marginal_covariance.h.
 // Two views are one board pose when their homographies put the board's corners
 // within this RMS distance of each other (px). The views are then counted once:
 // with a free principal point, a single distinct pose is refused (field "views").
