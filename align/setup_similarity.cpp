@@ -1,0 +1,409 @@
+#include "align/setup_similarity.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+namespace glasspiv {
+
+namespace {
+
+// Half the length of the tangent segment an edge point stands for. Points of a
+// chain lie at most 1 / cos(22.5 deg) = 1.08 px apart along a straight edge, so
+// 0.6 closes the gaps; on a curve of radius R it errs by 0.6^2 / (2 R) px.
+constexpr double kSegmentHalfPx = 0.6;
+constexpr double kIndexCellPx = 4;
+
+int blur_radius_px(double sigma_px) { return sigma_px > 0 ? int(std::ceil(3 * sigma_px)) : 0; }
+
+void check_image(const cv::Mat& image, const char* what) {
+  if (image.empty() || image.type() != CV_32FC1)
+    throw std::invalid_argument(std::string(what) + " must be a non-empty CV_32FC1 image");
+  if (image.rows < 3 || image.cols < 3) throw std::invalid_argument(std::string(what) + " must be at least 3 x 3 px");
+}
+
+cv::Mat blurred(const cv::Mat& image, double sigma_px) {
+  cv::Mat out;
+  const int r = blur_radius_px(sigma_px);
+  if (r == 0) return image.clone();
+  cv::GaussianBlur(image, out, cv::Size(2 * r + 1, 2 * r + 1), sigma_px, sigma_px, cv::BORDER_REPLICATE);
+  return out;
+}
+
+// |g| by central differences of the blurred image; 0 on the outer frame.
+cv::Mat gradient_magnitude_of(const cv::Mat& b) {
+  const int w = b.cols, h = b.rows;
+  cv::Mat g(h, w, CV_32F);
+  std::memset(g.ptr<float>(0), 0, sizeof(float) * w);
+  std::memset(g.ptr<float>(h - 1), 0, sizeof(float) * w);
+  for (int y = 1; y < h - 1; ++y) {
+    const float* up = b.ptr<float>(y - 1);
+    const float* row = b.ptr<float>(y);
+    const float* down = b.ptr<float>(y + 1);
+    float* out = g.ptr<float>(y);
+    out[0] = out[w - 1] = 0;
+    for (int x = 1; x < w - 1; ++x) {  // squared here (vectorises), root below
+      const float gx = 0.5f * (row[x + 1] - row[x - 1]);
+      const float gy = 0.5f * (down[x] - up[x]);
+      out[x] = gx * gx + gy * gy;
+    }
+  }
+  cv::sqrt(g, g);
+  return g;
+}
+
+// Nonzero mask pixels, shrunk by the filter support; never the outer frame.
+cv::Mat valid_mask_of(cv::Size size, const cv::Mat& mask8u, int support_px) {
+  cv::Mat valid;
+  if (mask8u.empty()) {
+    valid = cv::Mat(size, CV_8U, cv::Scalar(255));
+  } else {
+    if (mask8u.type() != CV_8UC1 || mask8u.size() != size)
+      throw std::invalid_argument("mask must be CV_8UC1 of the images' size");
+    valid = mask8u != 0;
+    if (support_px > 0)  // the default border value keeps the image edge from eroding
+      cv::erode(valid, valid, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * support_px + 1, 2 * support_px + 1)));
+  }
+  valid.row(0).setTo(0);
+  valid.row(size.height - 1).setTo(0);
+  valid.col(0).setTo(0);
+  valid.col(size.width - 1).setTo(0);
+  return valid;
+}
+
+struct Sums {
+  double a = 0, aa = 0, ab = 0;
+};
+
+template <class Run>
+Sums accumulate(const std::vector<Run>& runs, const cv::Mat& a, const cv::Mat& b) {
+  Sums s;
+  for (const Run& run : runs) {
+    const float* pa = a.ptr<float>(run.y);
+    const float* pb = b.ptr<float>(run.y);
+    // Two interleaved accumulator sets halve the add latency chains.
+    double s0 = 0, s1 = 0, q0 = 0, q1 = 0, c0 = 0, c1 = 0;
+    int x = run.x0;
+    for (; x + 1 < run.x1; x += 2) {
+      const double a0 = pa[x], a1 = pa[x + 1];
+      s0 += a0; s1 += a1;
+      q0 += a0 * a0; q1 += a1 * a1;
+      c0 += a0 * pb[x]; c1 += a1 * pb[x + 1];
+    }
+    if (x < run.x1) {
+      const double a0 = pa[x];
+      s0 += a0; q0 += a0 * a0; c0 += a0 * pb[x];
+    }
+    s.a += s0 + s1;
+    s.aa += q0 + q1;
+    s.ab += c0 + c1;
+  }
+  return s;
+}
+
+double ncc_of(long n, double sa, double saa, double sb, double sbb, double sab) {
+  if (n < 2) return 0;
+  const double va = saa - sa * sa / n, vb = sbb - sb * sb / n, cov = sab - sa * sb / n;
+  if (!(va > 0) || !(vb > 0)) return 0;
+  return std::clamp(cov / std::sqrt(va * vb), -1.0, 1.0);
+}
+
+// Percentile of |g| over the valid runs, every other row and column: a histogram
+// on the float's bits (sign 0, 8 exponent + 7 mantissa bits: 0.8 % wide bins),
+// interpolated linearly inside the bin.
+template <class Run>
+double gradient_percentile(const std::vector<Run>& runs, const cv::Mat& g, double percentile) {
+  constexpr std::uint32_t kLowBin = (127u - 32u) << 7;  // 2^-32
+  constexpr std::uint32_t kHighBin = (127u + 8u) << 7;  // 2^8
+  constexpr int kBins = int(kHighBin - kLowBin) + 1;
+  std::vector<std::uint32_t> hist(kBins, 0);
+  long count = 0;
+  for (const Run& run : runs) {
+    if (run.y % 2) continue;
+    const float* row = g.ptr<float>(run.y);
+    for (int x = run.x0 + (run.x0 % 2); x < run.x1; x += 2) {
+      std::uint32_t bits;
+      std::memcpy(&bits, &row[x], 4);
+      const std::uint32_t bin = std::clamp(bits >> 16, kLowBin, kHighBin) - kLowBin;
+      ++hist[bin];
+      ++count;
+    }
+  }
+  if (count == 0) return 0;
+  const double rank = std::clamp(percentile, 0.0, 100.0) / 100.0 * double(count);
+  double below = 0;
+  for (int i = 0; i < kBins; ++i) {
+    if (below + hist[i] >= rank && hist[i] > 0) {
+      const auto value_of = [&](std::uint32_t bin_bits) {
+        const std::uint32_t bits = (bin_bits + kLowBin) << 16;
+        float v;
+        std::memcpy(&v, &bits, 4);
+        return double(v);
+      };
+      const double lo = value_of(i), hi = value_of(i + 1);
+      return lo + (hi - lo) * (rank - below) / hist[i];
+    }
+    below += hist[i];
+  }
+  return 0;
+}
+
+struct Thresholds {
+  float low = 0, high = 0;
+};
+
+template <class Run>
+Thresholds thresholds_of(const std::vector<Run>& runs, const cv::Mat& g, const SimilarityOptions& o) {
+  const double reference = gradient_percentile(runs, g, o.edge_reference_percentile);
+  Thresholds t;
+  t.high = float(std::max(o.edge_threshold * reference, o.edge_min_gradient_per_px));
+  t.low = float(std::max(o.edge_low_ratio * t.high, o.edge_min_gradient_per_px));
+  return t;
+}
+
+// Non-maximum suppression across the edge, Gaussian sub-pixel peak, hysteresis.
+template <class Run>
+std::vector<EdgePoint> edges_of(const cv::Mat& b, const cv::Mat& g, const std::vector<Run>& runs, Thresholds t) {
+  const int w = g.cols, h = g.rows;
+  enum : std::uint8_t { kNone = 0, kWeak = 1, kAccepted = 2 };
+  cv::Mat flags(h, w, CV_8U, cv::Scalar(kNone));
+  std::vector<EdgePoint> candidates;
+  std::vector<int> pixel_of;
+  std::vector<int> stack;
+  for (const Run& run : runs) {
+    const int y = run.y;
+    const float* grow = g.ptr<float>(y);
+    const float* bup = b.ptr<float>(y - 1);
+    const float* brow = b.ptr<float>(y);
+    const float* bdown = b.ptr<float>(y + 1);
+    std::uint8_t* frow = flags.ptr<std::uint8_t>(y);
+    for (int x = run.x0; x < run.x1; ++x) {
+      const float m = grow[x];
+      if (!(m > t.low)) continue;
+      const float gx = 0.5f * (brow[x + 1] - brow[x - 1]);
+      const float gy = 0.5f * (bdown[x] - bup[x]);
+      const float ax = std::abs(gx), ay = std::abs(gy);
+      int sx = 1, sy = 0;  // step across the edge, rounded to one of 4 directions
+      if (ay <= 0.41421356f * ax) {
+        sx = 1, sy = 0;
+      } else if (ax <= 0.41421356f * ay) {
+        sx = 0, sy = 1;
+      } else {
+        sx = 1, sy = (gx * gy > 0) ? 1 : -1;
+      }
+      const float m_minus = g.ptr<float>(y - sy)[x - sx];
+      const float m_plus = g.ptr<float>(y + sy)[x + sx];
+      if (!(m > m_minus && m >= m_plus)) continue;
+      // Gaussian through the three samples: parabola in log |g|.
+      const double l_minus = std::log(std::max(m_minus, 1e-30f)), l0 = std::log(m),
+                   l_plus = std::log(std::max(m_plus, 1e-30f));
+      const double curvature = l_minus - 2 * l0 + l_plus;
+      const double offset = curvature < 0 ? std::clamp(0.5 * (l_minus - l_plus) / curvature, -0.5, 0.5) : 0.0;
+      EdgePoint p;
+      p.x_px = float(x + offset * sx);
+      p.y_px = float(y + offset * sy);
+      const float norm = std::sqrt(gx * gx + gy * gy);
+      p.normal_x = gx / norm;
+      p.normal_y = gy / norm;
+      p.gradient_per_px = m;
+      candidates.push_back(p);
+      pixel_of.push_back(y * w + x);
+      if (m >= t.high) {
+        frow[x] = kAccepted;
+        stack.push_back(y * w + x);
+      } else {
+        frow[x] = kWeak;
+      }
+    }
+  }
+  std::uint8_t* f = flags.ptr<std::uint8_t>(0);  // continuous (just allocated)
+  while (!stack.empty()) {  // candidates never touch the frame, so neighbours exist
+    const int i = stack.back();
+    stack.pop_back();
+    for (const int d : {-w - 1, -w, -w + 1, -1, 1, w - 1, w, w + 1}) {
+      if (f[i + d] == kWeak) {
+        f[i + d] = kAccepted;
+        stack.push_back(i + d);
+      }
+    }
+  }
+  std::vector<EdgePoint> edges;
+  edges.reserve(candidates.size());
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    if (f[pixel_of[k]] == kAccepted) edges.push_back(candidates[k]);
+  return edges;
+}
+
+}  // namespace
+
+// Shared by PhotoEdgeModel and detect_edges.
+struct SimilarityDetail {
+  using Run = PhotoEdgeModel::Run;
+  static std::vector<Run> runs_of(const cv::Mat& valid, long* count) {
+    std::vector<Run> runs;
+    *count = 0;
+    for (int y = 0; y < valid.rows; ++y) {
+      const std::uint8_t* row = valid.ptr<std::uint8_t>(y);
+      for (int x = 0; x < valid.cols;) {
+        if (!row[x]) {
+          ++x;
+          continue;
+        }
+        const int x0 = x;
+        while (x < valid.cols && row[x]) ++x;
+        runs.push_back({y, x0, x});
+        *count += x - x0;
+      }
+    }
+    return runs;
+  }
+  static int support_px(const SimilarityOptions& o) { return blur_radius_px(o.edge_blur_px) + 2; }
+};
+
+void SimilarityOptions::check() const {
+  const auto require = [](bool ok, const char* what) {
+    if (!ok) throw std::invalid_argument(std::string("SimilarityOptions: ") + what);
+  };
+  require(edge_blur_px >= 0 && edge_blur_px <= 50, "edge_blur_px must be in [0, 50]");
+  require(edge_threshold > 0 && edge_threshold <= 10, "edge_threshold must be in (0, 10]");
+  require(edge_reference_percentile > 0 && edge_reference_percentile <= 100,
+          "edge_reference_percentile must be in (0, 100]");
+  require(edge_low_ratio > 0 && edge_low_ratio <= 1, "edge_low_ratio must be in (0, 1]");
+  require(edge_min_gradient_per_px > 0, "edge_min_gradient_per_px must be positive");
+  require(chamfer_cutoff_px > 0 && chamfer_cutoff_px <= 1000, "chamfer_cutoff_px must be in (0, 1000]");
+}
+
+std::vector<EdgePoint> detect_edges(const cv::Mat& image32f, const SimilarityOptions& options, const cv::Mat& mask8u) {
+  options.check();
+  check_image(image32f, "image");
+  const cv::Mat valid = valid_mask_of(image32f.size(), mask8u, SimilarityDetail::support_px(options));
+  long count = 0;
+  const auto runs = SimilarityDetail::runs_of(valid, &count);
+  const cv::Mat b = blurred(image32f, options.edge_blur_px);
+  const cv::Mat g = gradient_magnitude_of(b);
+  return edges_of(b, g, runs, thresholds_of(runs, g, options));
+}
+
+EdgeDistanceIndex::EdgeDistanceIndex(std::vector<EdgePoint> points, cv::Size image_size, double cutoff_px)
+    : cell_px_(kIndexCellPx), cutoff_px_(cutoff_px) {
+  cells_x_ = std::max(1, int(std::ceil(image_size.width / cell_px_)));
+  cells_y_ = std::max(1, int(std::ceil(image_size.height / cell_px_)));
+  const auto cell_of = [&](const EdgePoint& p) {
+    const int cx = std::clamp(int(std::floor(p.x_px / cell_px_)), 0, cells_x_ - 1);
+    const int cy = std::clamp(int(std::floor(p.y_px / cell_px_)), 0, cells_y_ - 1);
+    return cy * cells_x_ + cx;
+  };
+  cell_start_.assign(std::size_t(cells_x_) * cells_y_ + 1, 0);  // counting sort by cell
+  for (const EdgePoint& p : points) ++cell_start_[cell_of(p) + 1];
+  for (std::size_t i = 1; i < cell_start_.size(); ++i) cell_start_[i] += cell_start_[i - 1];
+  std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
+  points_.resize(points.size());
+  for (const EdgePoint& p : points) points_[fill[cell_of(p)]++] = p;
+}
+
+double EdgeDistanceIndex::distance_px(double x_px, double y_px) const {
+  if (points_.empty()) return cutoff_px_;
+  const int cx = std::clamp(int(std::floor(x_px / cell_px_)), 0, cells_x_ - 1);
+  const int cy = std::clamp(int(std::floor(y_px / cell_px_)), 0, cells_y_ - 1);
+  double best_sq = cutoff_px_ * cutoff_px_;
+  const auto visit = [&](int ix, int iy) {
+    if (ix < 0 || iy < 0 || ix >= cells_x_ || iy >= cells_y_) return;
+    const int c = iy * cells_x_ + ix;
+    for (int k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
+      const EdgePoint& p = points_[k];
+      const double dx = x_px - p.x_px, dy = y_px - p.y_px;
+      const double across = dx * p.normal_x + dy * p.normal_y;
+      const double along = std::max(0.0, std::abs(dx * p.normal_y - dy * p.normal_x) - kSegmentHalfPx);
+      best_sq = std::min(best_sq, across * across + along * along);
+    }
+  };
+  // Rings of cells around the query's: whatever lies beyond ring k is at least
+  // k cells away, i.e. k * cell - kSegmentHalfPx from the query (segment reach).
+  for (int k = 0;; ++k) {
+    if (k == 0) {
+      visit(cx, cy);
+    } else {
+      for (int i = -k; i <= k; ++i) {
+        visit(cx + i, cy - k);
+        visit(cx + i, cy + k);
+      }
+      for (int i = -k + 1; i <= k - 1; ++i) {
+        visit(cx - k, cy + i);
+        visit(cx + k, cy + i);
+      }
+    }
+    const double reach = k * cell_px_ - kSegmentHalfPx;
+    if (reach > 0 && (reach * reach >= best_sq || reach >= cutoff_px_)) break;
+    if (k > cells_x_ + cells_y_) break;
+  }
+  return std::min(std::sqrt(best_sq), cutoff_px_);
+}
+
+double EdgeDistanceIndex::mean_distance_px(const std::vector<EdgePoint>& from) const {
+  if (from.empty()) return cutoff_px_;
+  double sum = 0;
+  for (const EdgePoint& p : from) sum += distance_px(p.x_px, p.y_px);
+  return sum / double(from.size());
+}
+
+PhotoEdgeModel::PhotoEdgeModel(const cv::Mat& photo32f, const SimilarityOptions& options, const cv::Mat& mask8u)
+    : options_(options) {
+  options_.check();
+  check_image(photo32f, "photo");
+  size_ = photo32f.size();
+  photo_ = photo32f.clone();  // the caller may reuse its buffer
+  valid_ = valid_mask_of(size_, mask8u, SimilarityDetail::support_px(options_));
+  runs_ = SimilarityDetail::runs_of(valid_, &valid_pixels_);
+  const cv::Mat b = blurred(photo_, options_.edge_blur_px);
+  grad_ = gradient_magnitude_of(b);
+  // Through the same code as the render's sums, so identical images give identical sums.
+  const Sums p = accumulate(runs_, photo_, photo_);
+  const Sums g = accumulate(runs_, grad_, grad_);
+  sum_p_ = p.a, sum_pp_ = p.aa, sum_g_ = g.a, sum_gg_ = g.aa;
+  edges_ = EdgeDistanceIndex(edges_of(b, grad_, runs_, thresholds_of(runs_, grad_, options_)), size_,
+                             options_.chamfer_cutoff_px);
+}
+
+Similarity PhotoEdgeModel::compare(const cv::Mat& render32f) const {
+  check_image(render32f, "render");
+  if (render32f.size() != size_) throw std::invalid_argument("render and photo differ in size");
+  const cv::Mat b = blurred(render32f, options_.edge_blur_px);
+  const cv::Mat g = gradient_magnitude_of(b);
+  const Sums r = accumulate(runs_, render32f, photo_);
+  const Sums rg = accumulate(runs_, g, grad_);
+
+  Similarity s;
+  s.valid_pixels = valid_pixels_;
+  s.ncc = ncc_of(valid_pixels_, r.a, r.aa, sum_p_, sum_pp_, r.ab);
+  s.gradient_ncc = ncc_of(valid_pixels_, rg.a, rg.aa, sum_g_, sum_gg_, rg.ab);
+
+  const EdgeDistanceIndex render_edges(edges_of(b, g, runs_, thresholds_of(runs_, g, options_)), size_,
+                                       options_.chamfer_cutoff_px);
+  s.render_edge_pixels = long(render_edges.points().size());
+  s.photo_edge_pixels = long(edges_.points().size());
+  s.chamfer_render_to_photo_px = edges_.mean_distance_px(render_edges.points());
+  s.chamfer_photo_to_render_px = render_edges.mean_distance_px(edges_.points());
+  s.chamfer_px = 0.5 * (s.chamfer_render_to_photo_px + s.chamfer_photo_to_render_px);
+  return s;
+}
+
+cv::Mat blurred_gradient_magnitude(const cv::Mat& image32f, double sigma_px) {
+  check_image(image32f, "image");
+  return gradient_magnitude_of(blurred(image32f, sigma_px));
+}
+
+Similarity compare_render_to_photo(const cv::Mat& render32f, const cv::Mat& photo32f, const SimilarityOptions& options,
+                                   const cv::Mat& mask8u) {
+  check_image(render32f, "render");
+  check_image(photo32f, "photo");
+  if (render32f.size() != photo32f.size()) throw std::invalid_argument("render and photo differ in size");
+  return PhotoEdgeModel(photo32f, options, mask8u).compare(render32f);
+}
+
+}  // namespace glasspiv
