@@ -1,0 +1,429 @@
+#include "calib/fit/extrinsic_fit.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <memory>
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+#include <ceres/ceres.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+
+#include "calib/fit/ceres_logging.h"
+#include "calib/fit/marginal_covariance.h"
+#include "calib/fit/outlier_rounds.h"
+#include "calib/fit/pose_cost.h"
+#include "calib/fit/reprojection_cost.h"
+#include "util/input_error.h"
+
+namespace glasspiv {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+std::string format_number(const char* format, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, format, value);
+  return buffer;
+}
+
+[[noreturn]] void refuse(const std::string& problem) { throw InputError("", "fiducials", problem); }
+
+std::string point_name(const std::vector<PointObservation>& points, int i) {
+  const std::string& label = points[i].label;
+  return "point " + std::to_string(i) + (label.empty() ? "" : " (" + label + ")");
+}
+
+using PoseBlock = std::array<double, kPoseParameterCount>;
+
+PoseBlock pose_block(const RigidTransform& pose) {
+  const Eigen::Vector3d r = pose.rvec();
+  return {r.x(), r.y(), r.z(), pose.translation_mm.x(), pose.translation_mm.y(), pose.translation_mm.z()};
+}
+
+RigidTransform pose_from_block(const double* block) {
+  return RigidTransform::from_rvec_tvec(Eigen::Vector3d(block[0], block[1], block[2]),
+                                        Eigen::Vector3d(block[3], block[4], block[5]));
+}
+
+bool finite_pose(const RigidTransform& pose) { return pose.rotation.allFinite() && pose.translation_mm.allFinite(); }
+
+// The user's projector as a residual, differentiated by central differences
+// (ceres::NumericDiffCostFunction). With the focal block: c + f (pixel - c).
+struct ProjectorResidual {
+  const PointProjector* projector;
+  int index;
+  Eigen::Vector2d observed_px;
+  Eigen::Vector2d principal_px;
+
+  bool project(const double* camera_from_world, double focal_scale, double* residual) const {
+    Eigen::Vector2d pixel;
+    if (!(*projector)(pose_from_block(camera_from_world), index, &pixel) || !pixel.allFinite()) return false;
+    pixel = principal_px + focal_scale * (pixel - principal_px);
+    residual[0] = pixel.x() - observed_px.x();
+    residual[1] = pixel.y() - observed_px.y();
+    return true;
+  }
+};
+struct ProjectorPoseResidual : ProjectorResidual {
+  bool operator()(const double* camera_from_world, double* residual) const {
+    return project(camera_from_world, 1.0, residual);
+  }
+};
+struct ProjectorPoseFocalResidual : ProjectorResidual {
+  bool operator()(const double* camera_from_world, const double* focal_scale, double* residual) const {
+    return project(camera_from_world, focal_scale[0], residual);
+  }
+};
+
+// Singular values of the centred points, descending.
+Eigen::Vector3d spread(const std::vector<PointObservation>& points) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const PointObservation& p : points) centroid += p.point_world_mm;
+  centroid /= static_cast<double>(points.size());
+  Eigen::MatrixXd centred(points.size(), 3);
+  for (std::size_t i = 0; i < points.size(); ++i) centred.row(i) = (points[i].point_world_mm - centroid).transpose();
+  return Eigen::JacobiSVD<Eigen::MatrixXd>(centred).singularValues();
+}
+
+void validate(const std::vector<PointObservation>& points, const ExtrinsicFitOptions& options) {
+  if (!(options.outlier_k == 0 || (std::isfinite(options.outlier_k) && options.outlier_k >= 1)))
+    throw InputError("", "outlier_k", "must be 0 (off) or a finite number >= 1");
+  if (options.max_iterations < 1) throw InputError("", "max_iterations", "must be at least 1");
+  if (options.num_threads < 1) throw InputError("", "num_threads", "must be at least 1");
+  if (!(std::isfinite(options.max_position_sigma_mm) && options.max_position_sigma_mm > 0))
+    throw InputError("", "max_position_sigma_mm", "must be a finite number > 0");
+  if (!(std::isfinite(options.max_rotation_sigma_deg) && options.max_rotation_sigma_deg > 0))
+    throw InputError("", "max_rotation_sigma_deg", "must be a finite number > 0");
+  if (options.initial_camera_from_world && !finite_pose(*options.initial_camera_from_world))
+    throw InputError("", "initial_camera_from_world", "is not finite");
+  if (static_cast<int>(points.size()) < kMinPosePoints)
+    refuse(std::to_string(points.size()) + " points given; a camera pose needs at least " +
+           std::to_string(kMinPosePoints) + " (better 20 or more, spread over the image)");
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].point_world_mm.allFinite()) refuse(point_name(points, i) + " has a non-finite world position");
+    if (!points[i].pixel_px.allFinite()) refuse(point_name(points, i) + " has a non-finite pixel");
+  }
+  const Eigen::Vector3d s = spread(points);
+  if (!(s(0) > 0)) refuse("all " + std::to_string(points.size()) + " points are at one place");
+  if (!(s(1) > kCollinearRelativeSpread * s(0)))
+    refuse("the " + std::to_string(points.size()) + " points are collinear (spread across their line " +
+           format_number("%.2g", s(1)) + " mm against " + format_number("%.3g", s(0)) +
+           " mm along it): a line leaves the rotation about it undetermined; use points spread in two directions");
+}
+
+// cv::solvePnP on undistorted (normalised) coordinates: SQPnP, then IPPE for
+// planar points, then EPnP (SQPnP refuses points whose normalised coordinates
+// spread less than ~3e-3: a small patch far away). nullopt when none gives a
+// finite pose with every point in front.
+std::optional<RigidTransform> pnp_start(const CameraModel& camera, const std::vector<PointObservation>& points,
+                                        bool planar) {
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> normalized;
+  for (const PointObservation& p : points) {
+    const UnprojectResult u = camera.unproject(p.pixel_px);
+    if (!u.ok()) continue;  // beyond the lens model's fold: left to the fit and its outlier rounds
+    object.emplace_back(p.point_world_mm.x(), p.point_world_mm.y(), p.point_world_mm.z());
+    normalized.emplace_back(u.normalized.x(), u.normalized.y());
+  }
+  if (static_cast<int>(object.size()) < kMinPosePoints) return std::nullopt;
+  const auto solve = [&](int method) -> std::optional<RigidTransform> {
+    cv::Vec3d rvec, tvec;
+    try {
+      if (!cv::solvePnP(object, normalized, cv::Matx33d::eye(), cv::noArray(), rvec, tvec, false, method))
+        return std::nullopt;
+    } catch (const cv::Exception&) {
+      return std::nullopt;  // degenerate points
+    }
+    if (!cv::checkRange(rvec) || !cv::checkRange(tvec)) return std::nullopt;
+    const RigidTransform pose =
+        RigidTransform::from_rvec_tvec(Eigen::Vector3d(rvec[0], rvec[1], rvec[2]), Eigen::Vector3d(tvec[0], tvec[1], tvec[2]));
+    for (const cv::Point3d& p : object)
+      if (!(pose.apply(Eigen::Vector3d(p.x, p.y, p.z)).z() > 0)) return std::nullopt;
+    return pose;
+  };
+  if (auto pose = solve(cv::SOLVEPNP_SQPNP)) return pose;
+  if (planar)
+    if (auto pose = solve(cv::SOLVEPNP_IPPE)) return pose;
+  return solve(cv::SOLVEPNP_EPNP);
+}
+
+// One point of the fit.
+struct FitPoint {
+  std::unique_ptr<ceres::CostFunction> cost;
+  ceres::ResidualBlockId block = nullptr;  // nullptr while dropped
+  Eigen::Vector2d residual_px = Eigen::Vector2d::Zero();
+  bool outlier = false;
+};
+
+// d(rotation angle vector)/d(rvec) at rvec: the rotation log(R(rvec + d) R(rvec)^T)
+// per unit d, by central differences.
+Eigen::Matrix3d rotation_jacobian(const Eigen::Vector3d& rvec) {
+  const Eigen::Matrix3d r_transposed = RigidTransform::from_rvec_tvec(rvec, Eigen::Vector3d::Zero()).rotation.transpose();
+  const double h = 1e-6;
+  Eigen::Matrix3d j;
+  for (int i = 0; i < 3; ++i) {
+    Eigen::Vector3d step = Eigen::Vector3d::Zero();
+    step(i) = h;
+    const auto log_of = [&](const Eigen::Vector3d& w) {
+      return RigidTransform{RigidTransform::from_rvec_tvec(w, Eigen::Vector3d::Zero()).rotation * r_transposed,
+                            Eigen::Vector3d::Zero()}
+          .rvec();
+    };
+    j.col(i) = (log_of(rvec + step) - log_of(rvec - step)) / (2 * h);
+  }
+  return j;
+}
+
+double largest_rotation_sigma_deg(const Eigen::Vector3d& rvec, const Eigen::Matrix3d& rvec_covariance) {
+  const Eigen::Matrix3d j = rotation_jacobian(rvec);
+  const Eigen::Matrix3d c = j * rvec_covariance * j.transpose();
+  const double lambda = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues().maxCoeff();
+  return std::sqrt(std::max(0.0, lambda)) * kRadToDeg;
+}
+
+}  // namespace
+
+PoseSigma camera_centre_sigma(const RigidTransform& camera_from_world, const Eigen::MatrixXd& covariance) {
+  const Eigen::Matrix<double, 6, 6> c = covariance.topLeftCorner<6, 6>();
+  const Eigen::Vector3d rvec = camera_from_world.rvec(), t = camera_from_world.translation_mm;
+  // C = -R(rvec)^T t: d/dt = -R^T; d/drvec by central differences.
+  Eigen::Matrix<double, 3, 6> j;
+  const double h = 1e-6;
+  for (int i = 0; i < 3; ++i) {
+    Eigen::Vector3d step = Eigen::Vector3d::Zero();
+    step(i) = h;
+    const Eigen::Vector3d plus = RigidTransform::from_rvec_tvec(rvec + step, t).inverse().translation_mm;
+    const Eigen::Vector3d minus = RigidTransform::from_rvec_tvec(rvec - step, t).inverse().translation_mm;
+    j.col(i) = (plus - minus) / (2 * h);
+  }
+  j.rightCols<3>() = -camera_from_world.rotation.transpose();
+  PoseSigma out;
+  out.position_sigma_mm = (j * c * j.transpose()).diagonal().cwiseMax(0).cwiseSqrt();
+  out.rotation_sigma_deg = largest_rotation_sigma_deg(rvec, c.topLeftCorner<3, 3>());
+  return out;
+}
+
+PoseSigma origin_sigma(const RigidTransform& destination_from_source, const Eigen::MatrixXd& covariance) {
+  const Eigen::Matrix<double, 6, 6> c = covariance.topLeftCorner<6, 6>();
+  PoseSigma out;
+  out.position_sigma_mm = c.bottomRightCorner<3, 3>().diagonal().cwiseMax(0).cwiseSqrt();
+  out.rotation_sigma_deg = largest_rotation_sigma_deg(destination_from_source.rvec(), c.topLeftCorner<3, 3>());
+  return out;
+}
+
+ExtrinsicFit fit_camera_pose(const CameraModel& camera, const std::vector<PointObservation>& points,
+                             const ExtrinsicFitOptions& options) {
+  silence_ceres_logging();
+  validate(points, options);
+  const int n = static_cast<int>(points.size());
+  const Eigen::Vector3d singular_values = spread(points);
+  const bool planar = !(singular_values(2) > kCollinearRelativeSpread * singular_values(0));
+
+  // --- Start.
+  RigidTransform start;
+  if (options.initial_camera_from_world) {
+    start = *options.initial_camera_from_world;
+  } else {
+    const std::optional<RigidTransform> pnp = pnp_start(camera, points, planar);
+    if (!pnp)
+      refuse("no camera pose puts the " + std::to_string(n) +
+             " points in front of the camera (SQPnP" + std::string(planar ? ", IPPE" : "") +
+             " and EPnP on the undistorted pixels): check that the pixels belong to the world points, or give "
+             "initial_camera_from_world");
+    start = *pnp;
+  }
+  PoseBlock pose = pose_block(start);
+  double focal_scale = 1.0;
+
+  // --- The problem.
+  const int parameter_count = kPoseParameterCount + (options.refine_focal ? 1 : 0);
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.enable_fast_removal = true;
+  ceres::Problem problem(problem_options);
+  problem.AddParameterBlock(pose.data(), kPoseParameterCount);
+  std::vector<double*> blocks = {pose.data()};
+  if (options.refine_focal) {
+    problem.AddParameterBlock(&focal_scale, 1);
+    problem.SetParameterLowerBound(&focal_scale, 0, 1e-3);  // a focal length stays positive
+    blocks.push_back(&focal_scale);
+  }
+  const Eigen::Vector2d principal_px(camera.cx_px(), camera.cy_px());
+  std::vector<FitPoint> fit_points(n);
+  for (int i = 0; i < n; ++i) {
+    const PointObservation& p = points[i];
+    ceres::CostFunction* cost = nullptr;
+    if (options.projector) {
+      const ProjectorResidual r{&options.projector, i, p.pixel_px, principal_px};
+      if (options.refine_focal)
+        cost = new ceres::NumericDiffCostFunction<ProjectorPoseFocalResidual, ceres::CENTRAL, 2, kPoseParameterCount, 1>(
+            new ProjectorPoseFocalResidual{r});
+      else
+        cost = new ceres::NumericDiffCostFunction<ProjectorPoseResidual, ceres::CENTRAL, 2, kPoseParameterCount>(
+            new ProjectorPoseResidual{r});
+    } else {
+      cost = options.refine_focal ? PoseFocalReprojectionCost::Create(camera, p.pixel_px, p.point_world_mm)
+                                  : PoseReprojectionCost::Create(camera, p.pixel_px, p.point_world_mm);
+    }
+    fit_points[i].cost.reset(cost);
+  }
+  const auto update_residuals = [&] {
+    const double* parameters[2] = {pose.data(), &focal_scale};
+    for (FitPoint& f : fit_points) {
+      double r[2];
+      if (f.cost->Evaluate(parameters, r, nullptr))
+        f.residual_px = Eigen::Vector2d(r[0], r[1]);
+      else
+        f.residual_px.setConstant(std::numeric_limits<double>::infinity());  // no image
+    }
+  };
+  const auto add_block = [&](FitPoint& f) { f.block = problem.AddResidualBlock(f.cost.get(), nullptr, blocks); };
+
+  // Points without an image at the start stay out of the first solve; the
+  // outlier rounds re-test them.
+  update_residuals();
+  ExtrinsicFit fit;
+  double start_sum = 0;
+  int start_count = 0;
+  for (int i = 0; i < n; ++i) {
+    FitPoint& f = fit_points[i];
+    if (f.residual_px.allFinite()) {
+      add_block(f);
+      start_sum += f.residual_px.squaredNorm();
+      ++start_count;
+    } else {
+      if (options.outlier_k == 0) refuse(point_name(points, i) + " has no image at the start pose");
+      f.outlier = true;
+    }
+  }
+  if (start_count < kMinPosePoints)
+    refuse("only " + std::to_string(start_count) + " of the " + std::to_string(n) +
+           " points have an image at the start pose; give initial_camera_from_world");
+  fit.initial_rms_px = std::sqrt(start_sum / start_count);
+
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.minimizer_type = ceres::TRUST_REGION;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.function_tolerance = 1e-14;
+  solver_options.gradient_tolerance = 1e-14;
+  solver_options.parameter_tolerance = 1e-14;
+  solver_options.num_threads = options.num_threads;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.minimizer_progress_to_stdout = false;
+
+  const auto solve = [&](int) {
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+    fit.iterations += std::max(0, static_cast<int>(summary.iterations.size()) - 1);
+    fit.solve_time_s += summary.total_time_in_seconds;
+    fit.termination = ceres::TerminationTypeToString(summary.termination_type);
+    if (summary.termination_type == ceres::FAILURE)
+      refuse("the solver failed (" + summary.message + "): check that the pixels belong to the world points");
+    for (double v : pose)
+      if (!std::isfinite(v)) refuse("the fit diverged (non-finite pose)");
+    update_residuals();
+  };
+  const auto candidates = [&] {
+    std::vector<OutlierCandidate> out;
+    for (const FitPoint& f : fit_points) out.push_back({f.residual_px.norm(), f.block == nullptr});
+    return out;
+  };
+  const auto apply = [&](const OutlierVerdict& verdict) {
+    for (int i = 0; i < n; ++i) {
+      FitPoint& f = fit_points[i];
+      if (verdict.outlier[i] && f.block) {
+        problem.RemoveResidualBlock(f.block);
+        f.block = nullptr;
+      } else if (!verdict.outlier[i] && !f.block) {
+        add_block(f);
+      }
+      f.outlier = verdict.outlier[i];
+    }
+    int inliers = 0;
+    for (const FitPoint& f : fit_points) inliers += f.block != nullptr;
+    if (inliers < kMinPosePoints)
+      refuse("only " + std::to_string(inliers) + " of the " + std::to_string(n) +
+             " points fit one pose (the rest are outliers at threshold " +
+             format_number("%.3g", verdict.threshold_px) + " px); a pose needs " + std::to_string(kMinPosePoints));
+  };
+  fit.rounds = run_outlier_rounds(options.outlier_k, solve, candidates, apply).rounds;
+
+  // --- The pose and its checks.
+  fit.camera_from_world = pose_from_block(pose.data());
+  fit.focal_scale = focal_scale;
+  if (!finite_pose(fit.camera_from_world) || !std::isfinite(focal_scale)) refuse("the fit diverged (non-finite pose)");
+  for (int i = 0; i < n; ++i)
+    if (!(fit.camera_from_world.apply(points[i].point_world_mm).z() > 0))
+      refuse(point_name(points, i) +
+             " lies behind the camera at the fitted pose: the pixels do not belong to the world points, or the "
+             "start was wrong (give initial_camera_from_world)");
+
+  double sum_squares = 0;
+  std::map<int, std::pair<int, double>> group_sums;  // group -> (inliers, sum |r|^2)
+  for (int i = 0; i < n; ++i) {
+    const FitPoint& f = fit_points[i];
+    const bool outlier = f.block == nullptr;
+    fit.residuals.push_back({i, points[i].group, f.residual_px, outlier});
+    auto& g = group_sums[points[i].group];
+    if (outlier) {
+      ++fit.outlier_count;
+      continue;
+    }
+    ++fit.inlier_count;
+    sum_squares += f.residual_px.squaredNorm();
+    ++g.first;
+    g.second += f.residual_px.squaredNorm();
+  }
+  for (const auto& [group, sums] : group_sums)
+    fit.groups.push_back({group, sums.first,
+                          sums.first > 0 ? std::sqrt(sums.second / sums.first) : std::numeric_limits<double>::quiet_NaN()});
+  fit.rms_px = std::sqrt(sum_squares / fit.inlier_count);
+  fit.sigma_px = std::sqrt(sum_squares / (2 * fit.inlier_count - parameter_count));
+
+  // --- Covariance at max(sigma_px, floor).
+  const double covariance_sigma = std::max(fit.sigma_px, kObservabilitySigmaFloorPx);
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.parameter_blocks = blocks;
+  for (const FitPoint& f : fit_points)
+    if (f.block) evaluate.residual_blocks.push_back(f.block);
+  evaluate.num_threads = options.num_threads;
+  ceres::CRSMatrix jacobian;
+  if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian))
+    refuse("the Jacobian at the fitted pose cannot be evaluated");
+  const MarginalCovariance covariance = marginal_covariance(jacobian, parameter_count, {}, {}, covariance_sigma);
+  fit.reciprocal_condition = covariance.reciprocal_condition;
+  if (covariance.covariance.size() == 0 || covariance.undetermined.cols() > 0)
+    refuse("the pose is not determined: the normal equations are singular (reciprocal condition " +
+           format_number("%.1e", covariance.reciprocal_condition) + "); use points spread over the image and in depth");
+  fit.covariance = covariance.covariance;
+  const PoseSigma sigma = camera_centre_sigma(fit.camera_from_world, fit.covariance);
+  fit.position_sigma_mm = sigma.position_sigma_mm;
+  fit.rotation_sigma_deg = sigma.rotation_sigma_deg;
+  const double position_sigma = fit.position_sigma_mm.maxCoeff();
+  if (!(position_sigma <= options.max_position_sigma_mm) || !(fit.rotation_sigma_deg <= options.max_rotation_sigma_deg))
+    refuse("the pose is not determined: camera position 1-sigma " + format_number("%.3g", position_sigma) +
+           " mm (limit " + format_number("%g", options.max_position_sigma_mm) + " mm), rotation 1-sigma " +
+           format_number("%.3g", fit.rotation_sigma_deg) + " deg (limit " +
+           format_number("%g", options.max_rotation_sigma_deg) + " deg) at " +
+           format_number("%.3g", covariance_sigma) + " px noise from " + std::to_string(fit.inlier_count) +
+           " points; use points spread wider over the image and in depth");
+
+  // --- The camera.
+  if (options.refine_focal) {
+    const std::vector<double> distortion = camera.distortion();
+    fit.camera = CameraModel(camera.width_px(), camera.height_px(), focal_scale * camera.fx_px(),
+                             focal_scale * camera.fy_px(), camera.cx_px(), camera.cy_px(), distortion);
+  } else {
+    fit.camera = camera;
+  }
+  return fit;
+}
+
+}  // namespace glasspiv
