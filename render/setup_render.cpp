@@ -27,10 +27,18 @@ std::vector<float> render_setup(const TraceScene& scene, const SetupLook& look, 
                                 const RigidTransform& camera_from_world, const TraceOptions& options,
                                 int samples_per_axis, int threads, const std::function<void(int, int)>& progress,
                                 SetupRenderStats* stats) {
+  const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
+  return render_setup(scene, *index, look, camera, camera_from_world, options, samples_per_axis, threads, progress,
+                      stats);
+}
+
+std::vector<float> render_setup(const TraceScene& scene, const SceneIndex& index, const SetupLook& look,
+                                const CameraModel& camera, const RigidTransform& camera_from_world,
+                                const TraceOptions& options, int samples_per_axis, int threads,
+                                const std::function<void(int, int)>& progress, SetupRenderStats* stats) {
   if (samples_per_axis < 1) throw std::invalid_argument("render_setup: samples_per_axis must be >= 1");
   const int width = camera.width_px(), height = camera.height_px();
   const int k = samples_per_axis;
-  const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
   std::vector<float> image(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0.0f);
   std::vector<SetupRenderStats> row_stats(static_cast<std::size_t>(height));
   const int used = parallel_rows(
@@ -48,7 +56,7 @@ std::vector<float> render_setup(const TraceScene& scene, const SetupLook& look, 
                 ++st.unproject_failures;
                 continue;
               }
-              trace_ray(scene, *index, *ray, options, &r);
+              trace_ray(scene, index, *ray, options, &r);
               ++st.camera_rays;
               st.branches_traced += r.counts.branches_traced;
               st.closed_form_rays += r.counts.closed_form;

@@ -42,5 +42,12 @@ std::vector<float> render_setup(const TraceScene& scene, const SetupLook& look, 
                                 int samples_per_axis = 2, int threads = 0,
                                 const std::function<void(int, int)>& progress = {},
                                 SetupRenderStats* stats = nullptr);
+// The same with an index made from `scene` once (renders of one scene from
+// many poses, as alignment makes them, need not rebuild it).
+std::vector<float> render_setup(const TraceScene& scene, const SceneIndex& index, const SetupLook& look,
+                                const CameraModel& camera, const RigidTransform& camera_from_world,
+                                const TraceOptions& options, int samples_per_axis = 2, int threads = 0,
+                                const std::function<void(int, int)>& progress = {},
+                                SetupRenderStats* stats = nullptr);
 
 }  // namespace glasspiv

@@ -1,0 +1,216 @@
+#include "align/align_refine.h"
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include <ceres/ceres.h>
+#include <opencv2/imgproc.hpp>
+
+#include "calib/fit/ceres_logging.h"
+#include "render/scene_index.h"
+#include "util/stopwatch.h"
+
+namespace glasspiv {
+namespace {
+
+// Parameter vector: camera perturbation (rotation 3 rad, translation 3 mm, both
+// in the camera frame: camera_from_world = delta * start), then the optional
+// focal scale offset, index offset, glass offset (3 mm).
+struct Layout {
+  bool focal, index, glass;
+  int size() const { return 6 + focal + index + 3 * glass; }
+};
+
+struct Model {
+  RigidTransform camera_from_world;
+  double focal_scale = 1, index_offset = 0;
+  Eigen::Vector3d glass_offset_mm = Eigen::Vector3d::Zero();
+};
+
+Model model_of(const double* p, const Layout& layout, const RigidTransform& start) {
+  Model m;
+  const RigidTransform delta = RigidTransform::from_rvec_tvec(Eigen::Vector3d(p[0], p[1], p[2]),
+                                                              Eigen::Vector3d(p[3], p[4], p[5]));
+  m.camera_from_world = delta * start;
+  int k = 6;
+  if (layout.focal) m.focal_scale = 1 + p[k++];
+  if (layout.index) m.index_offset = p[k++];
+  if (layout.glass) m.glass_offset_mm = Eigen::Vector3d(p[k], p[k + 1], p[k + 2]);
+  return m;
+}
+
+// Zero mean, unit variance over the compared pixels; the rest zero.
+cv::Mat normalised(const cv::Mat& feature, const cv::Mat& valid) {
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(feature, mean, stddev, valid);
+  cv::Mat out = (feature - mean[0]) / std::max(stddev[0], 1e-12);
+  out.setTo(0, valid == 0);
+  return out;
+}
+
+// One level of the pyramid: the binned photo's features and what renders it.
+class LevelProblem : public ceres::CostFunction {
+ public:
+  LevelProblem(const TraceScene& scene, const SceneIndex& index, const SetupLook& look, const CameraModel& camera,
+               const RigidTransform& start, const cv::Mat& photo_features, const cv::Mat& valid, const Layout& layout,
+               const RefineOptions& options, int binning, double distance_mm, int* renders)
+      : scene_(scene), index_(index), look_(look), camera_(camera), start_(start), photo_(photo_features),
+        valid_(valid), layout_(layout), options_(options), renders_(renders) {
+    for (int r = 0; r < valid.rows; ++r)
+      for (int c = 0; c < valid.cols; ++c)
+        if (valid.at<unsigned char>(r, c)) pixels_.push_back(r * valid.cols + c);
+    set_num_residuals(static_cast<int>(pixels_.size()));
+    mutable_parameter_block_sizes()->push_back(layout.size());
+    // Steps that move the picture by a third of a pixel of this level.
+    const double f = camera.fx_px(), third_px = 1.0 / 3.0;
+    const double half_diagonal_px = 0.5 * std::hypot(camera.width_px(), camera.height_px());
+    steps_.assign(static_cast<std::size_t>(layout.size()), 0);
+    for (int i = 0; i < 3; ++i) steps_[i] = third_px / f;
+    for (int i = 3; i < 6; ++i) steps_[i] = third_px * distance_mm / f;
+    int k = 6;
+    if (layout.focal) steps_[k++] = third_px / half_diagonal_px;
+    if (layout.index) steps_[k++] = 2e-3;
+    if (layout.glass)
+      for (int i = 0; i < 3; ++i) steps_[k++] = third_px * distance_mm / f;
+    (void)binning;
+  }
+
+  // The residuals at p: normalised photo features minus normalised render features.
+  bool residuals(const double* p, double* out) const {
+    const Model m = model_of(p, layout_, start_);
+    const bool glass_moves = layout_.index || layout_.glass;
+    std::unique_ptr<SceneIndex> own_index;
+    TraceScene adjusted;
+    const TraceScene* scene = &scene_;
+    const SceneIndex* index = &index_;
+    if (glass_moves && (m.index_offset != 0 || m.glass_offset_mm != Eigen::Vector3d::Zero())) {
+      adjusted = adjusted_glass(scene_, m.index_offset, m.glass_offset_mm);
+      own_index = make_scene_index(adjusted);
+      scene = &adjusted;
+      index = own_index.get();
+    }
+    const CameraModel model = m.focal_scale == 1 ? camera_ : scaled_focal(camera_, m.focal_scale);
+    std::vector<float> radiance = render_setup(*scene, *index, look_, model, m.camera_from_world,
+                                                          options_.trace, options_.samples_per_axis, options_.threads);
+    ++*renders_;
+    cv::Mat render(camera_.height_px(), camera_.width_px(), CV_32F, radiance.data());
+    const cv::Mat features = normalised(blurred_gradient_magnitude(render, options_.blur_px), valid_);
+    const float* a = photo_.ptr<float>(0);
+    const float* b = features.ptr<float>(0);
+    for (std::size_t i = 0; i < pixels_.size(); ++i) out[i] = a[pixels_[i]] - b[pixels_[i]];
+    if (options_.progress) options_.progress(0, *renders_);
+    return true;
+  }
+
+  bool Evaluate(double const* const* parameters, double* residual, double** jacobians) const override {
+    const int n = layout_.size(), m = num_residuals();
+    if (!residuals(parameters[0], residual)) return false;
+    if (!jacobians || !jacobians[0]) return true;
+    std::vector<double> p(parameters[0], parameters[0] + n), plus(static_cast<std::size_t>(m)),
+        minus(static_cast<std::size_t>(m));
+    for (int j = 0; j < n; ++j) {
+      const double h = steps_[static_cast<std::size_t>(j)];
+      p[j] = parameters[0][j] + h;
+      residuals(p.data(), plus.data());
+      p[j] = parameters[0][j] - h;
+      residuals(p.data(), minus.data());
+      p[j] = parameters[0][j];
+      for (int i = 0; i < m; ++i) jacobians[0][static_cast<std::size_t>(i) * n + j] = (plus[i] - minus[i]) / (2 * h);
+    }
+    return true;
+  }
+
+ private:
+  const TraceScene& scene_;
+  const SceneIndex& index_;
+  const SetupLook& look_;
+  const CameraModel& camera_;
+  RigidTransform start_;
+  cv::Mat photo_, valid_;
+  Layout layout_;
+  const RefineOptions& options_;
+  int* renders_;
+  std::vector<int> pixels_;
+  std::vector<double> steps_;
+};
+
+// The photo binned like binned(camera, b): b x b blocks averaged, the ragged
+// right and bottom edge dropped.
+cv::Mat binned_photo(const cv::Mat& photo, int b, int width, int height) {
+  if (b == 1) return photo;
+  cv::Mat out;
+  cv::resize(photo(cv::Rect(0, 0, width * b, height * b)), out, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+  return out;
+}
+
+}  // namespace
+
+RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, const CameraModel& camera,
+                              const RigidTransform& start_camera_from_world, const cv::Mat& photo32f,
+                              const RefineParameters& parameters, const RefineOptions& options) {
+  if (photo32f.type() != CV_32FC1 || photo32f.cols != camera.width_px() || photo32f.rows != camera.height_px())
+    throw std::invalid_argument("refine_alignment: the photo must be CV_32FC1 of the camera's size");
+  if (options.binning_levels.empty()) throw std::invalid_argument("refine_alignment: no binning levels");
+  silence_ceres_logging();
+  const Stopwatch total;
+  const Layout layout{parameters.focal, parameters.refractive_index, parameters.glass_position};
+  const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
+  // The distance that converts a third of a pixel into mm: camera to the sheet's origin.
+  const double distance_mm =
+      std::max(1.0, start_camera_from_world.apply(scene.sheet.origin_mm).norm());
+  std::vector<double> p(static_cast<std::size_t>(layout.size()), 0.0);
+  RefineResult result;
+  for (int b : options.binning_levels) {
+    if (b < 1) throw std::invalid_argument("refine_alignment: binning levels must be >= 1");
+    const Stopwatch level_time;
+    const CameraModel level_camera = binned(camera, b);
+    const cv::Mat photo = binned_photo(photo32f, b, level_camera.width_px(), level_camera.height_px());
+    SimilarityOptions similarity;
+    similarity.edge_blur_px = options.blur_px;
+    const PhotoEdgeModel photo_model(photo, similarity);
+    const cv::Mat features = normalised(photo_model.gradient_magnitude(), photo_model.valid_mask());
+    int renders = 0;
+    auto* cost = new LevelProblem(scene, *index, look, level_camera, start_camera_from_world, features,
+                                  photo_model.valid_mask(), layout, options, b, distance_mm, &renders);
+    RefineLevel level;
+    level.binning = b;
+    level.width_px = level_camera.width_px();
+    level.height_px = level_camera.height_px();
+    const auto ncc_at = [&](const std::vector<double>& q) {
+      const Model m = model_of(q.data(), layout, start_camera_from_world);
+      const TraceScene adjusted = adjusted_glass(scene, m.index_offset, m.glass_offset_mm);
+      std::vector<float> radiance = render_setup(adjusted, look, scaled_focal(level_camera, m.focal_scale),
+                                                 m.camera_from_world, options.trace, options.samples_per_axis,
+                                                 options.threads);
+      return photo_model.compare(cv::Mat(level_camera.height_px(), level_camera.width_px(), CV_32F, radiance.data()))
+          .gradient_ncc;
+    };
+    level.gradient_ncc_before = ncc_at(p);
+    ceres::Problem problem;
+    problem.AddResidualBlock(cost, nullptr, p.data());
+    ceres::Solver::Options solver;
+    solver.linear_solver_type = ceres::DENSE_QR;
+    solver.max_num_iterations = options.max_iterations;
+    solver.function_tolerance = 1e-8;
+    solver.parameter_tolerance = 1e-9;
+    solver.num_threads = 1;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver, &problem, &summary);
+    level.iterations = static_cast<int>(summary.iterations.size()) - 1;
+    level.gradient_ncc_after = ncc_at(p);
+    level.renders = renders + 2;
+    level.seconds = level_time.seconds();
+    result.renders += level.renders;
+    result.levels.push_back(level);
+  }
+  const Model m = model_of(p.data(), layout, start_camera_from_world);
+  result.camera_from_world = m.camera_from_world;
+  result.focal_scale = m.focal_scale;
+  result.refractive_index_offset = m.index_offset;
+  result.glass_offset_mm = m.glass_offset_mm;
+  result.seconds = total.seconds();
+  return result;
+}
+
+}  // namespace glasspiv

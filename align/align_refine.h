@@ -1,0 +1,77 @@
+#pragma once
+// Alignment by the picture: the camera pose (and on request the focal length,
+// the glass's refractive index and the position of the glass parts) optimised
+// until the render of the setup (render/setup_render.h) agrees with the
+// photograph. Coarse to fine: binned renders first, with the same blur in
+// binned pixels, so a start off by a few mm and degrees is pulled in before
+// full resolution fixes the last fraction of a pixel. See docs/alignment.md.
+//
+// The objective is least squares on the blurred gradient magnitudes of photo
+// and render, each normalised to zero mean and unit variance over the compared
+// pixels: minimising it maximises align/setup_similarity.h's gradient_ncc (edge
+// agreement, insensitive to the lighting of the photo), and it is smooth in the
+// parameters. Ceres (Levenberg-Marquardt) drives it; its Jacobian is by central
+// differences of whole renders, with steps that move the picture by about a
+// third of a (binned) pixel, far above the render's sampling noise.
+// What stays the same between evaluations is made once per level: the binned
+// photo, its normalised features, the trace index when only the camera moves.
+// No I/O.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "align/model_adjustment.h"
+#include "align/setup_similarity.h"
+#include "calib/camera_model.h"
+#include "calib/rigid_transform.h"
+#include "render/path_tracer.h"
+#include "render/setup_render.h"
+
+namespace glasspiv {
+
+struct RefineParameters {
+  bool focal = false;             // one scale on fx, fy
+  bool refractive_index = false;  // one offset on the index of every glass solid
+  bool glass_position = false;    // one translation of every glass solid (mm, world axes)
+};
+
+struct RefineOptions {
+  std::vector<int> binning_levels = {8, 4, 2, 1};  // coarse to fine; each >= 1
+  double blur_px = 1.5;           // Gaussian sigma in binned pixels, every level
+  int samples_per_axis = 1;       // per pixel and axis in the renders
+  int max_iterations = 8;         // Levenberg-Marquardt steps per level
+  TraceOptions trace{true, 1e-2, 32};
+  int threads = 0;                // render threads; 0: all
+  // Called after each evaluation (level index, renders so far) for a progress bar.
+  std::function<void(int, int)> progress;
+};
+
+struct RefineLevel {
+  int binning = 1;
+  int width_px = 0, height_px = 0;
+  double gradient_ncc_before = 0, gradient_ncc_after = 0;
+  int iterations = 0, renders = 0;
+  double seconds = 0;
+};
+
+struct RefineResult {
+  RigidTransform camera_from_world;
+  double focal_scale = 1;
+  double refractive_index_offset = 0;
+  Eigen::Vector3d glass_offset_mm = Eigen::Vector3d::Zero();
+  std::vector<RefineLevel> levels;
+  int renders = 0;
+  double seconds = 0;
+};
+
+// `photo32f`: CV_32FC1 of the camera's size (values in any units: they are
+// normalised). Throws std::invalid_argument for a photo of another size or an
+// empty level list (commands check the user's input first).
+RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, const CameraModel& camera,
+                              const RigidTransform& start_camera_from_world, const cv::Mat& photo32f,
+                              const RefineParameters& parameters = {}, const RefineOptions& options = {});
+
+}  // namespace glasspiv

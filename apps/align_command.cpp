@@ -1,0 +1,405 @@
+// glasspiv align: the model placed on the setup by its photographs.
+//   align pose   SCENE PHOTO... --camera NAME: pose from the fiducials (through glass)
+//   align check  SCENE PHOTO --camera NAME -o overlay.png: render vs photo, scored
+//   align refine SCENE PHOTO --camera NAME: pose (and more) optimised on the picture
+// Thin: parse, call align/, report. See docs/alignment.md.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "align/align_pose.h"
+#include "align/align_refine.h"
+#include "align/fiducial_detection.h"
+#include "align/overlay_image.h"
+#include "align/prepared_scene.h"
+#include "align/scene_update.h"
+#include "align/setup_similarity.h"
+#include "apps/cli_checks.h"
+#include "apps/cli_files.h"
+#include "apps/commands.h"
+#include "render/setup_render.h"
+#include "targets/photo_io.h"
+#include "util/atomic_file.h"
+#include "util/image_file.h"
+#include "util/input_error.h"
+#include "util/progress_bar.h"
+
+namespace glasspiv {
+namespace {
+namespace fs = std::filesystem;
+
+struct AlignOptions {
+  std::string scene, camera, output, json, scene_out;
+  std::vector<std::string> photos;
+  bool pinhole = false, refine_focal = false, no_reflections = false;
+  bool refine_index = false, refine_glass = false;
+  std::vector<int> levels = {8, 4, 2, 1};
+  int samples = 2, threads = 0;
+  double blur_px = 1.5;
+};
+
+// The photo's values in [0, 1] (16-bit keeps its levels), checked against the camera.
+cv::Mat read_photo_values(const std::string& path, const CameraModel& camera, const std::string& camera_name) {
+  GrayImage img = read_gray_image(path);
+  if (img.width != camera.width_px() || img.height != camera.height_px())
+    throw InputError(path, "size",
+                     fmt::format("is {}x{} px, camera '{}' is {}x{} px", img.width, img.height, camera_name,
+                                 camera.width_px(), camera.height_px()));
+  return cv::Mat(img.height, img.width, CV_32F, img.values.data()).clone();
+}
+
+SetupLook look_of(const PreparedScene& ps) {
+  SetupLook look;
+  look.background_radiance = ps.scene.background.radiance;
+  look.textures = ps.textures_by_solid();
+  return look;
+}
+
+TraceOptions trace_options(const AlignOptions& o) {
+  TraceOptions t;
+  t.reflections = !o.no_reflections;
+  return t;
+}
+
+std::string describe_pose(const RigidTransform& camera_from_world) {
+  const Eigen::Vector3d c = camera_from_world.inverse().translation_mm, r = camera_from_world.rvec();
+  return fmt::format("position [{:.4f}, {:.4f}, {:.4f}] mm, rvec [{:.7f}, {:.7f}, {:.7f}] rad", c.x(), c.y(), c.z(),
+                     r.x(), r.y(), r.z());
+}
+
+// The change from `a` to `b`: camera centre distance (mm) and rotation angle (deg).
+std::pair<double, double> pose_change(const RigidTransform& a, const RigidTransform& b) {
+  const Eigen::AngleAxisd d(b.rotation * a.rotation.transpose());
+  return {(b.inverse().translation_mm - a.inverse().translation_mm).norm(), std::abs(d.angle()) * 180 / M_PI};
+}
+
+nlohmann::json pose_json(const RigidTransform& t) {
+  const Eigen::Vector3d c = t.inverse().translation_mm, r = t.rvec(), v = t.translation_mm;
+  return {{"rvec", {r.x(), r.y(), r.z()}}, {"tvec_mm", {v.x(), v.y(), v.z()}}, {"position_mm", {c.x(), c.y(), c.z()}}};
+}
+
+void write_json(const std::string& path, const nlohmann::json& j) {
+  if (!path.empty()) write_file_atomically(path, j.dump(2) + "\n");
+}
+
+// -o scene.yaml: the scene with the camera's pose replaced, in the scene's folder.
+void check_scene_out(const AlignOptions& o) {
+  if (o.scene_out.empty()) return;
+  const fs::path in = fs::absolute(o.scene).parent_path(), out = fs::absolute(o.scene_out).parent_path();
+  if (fs::weakly_canonical(in) != fs::weakly_canonical(out))
+    throw InputError(o.scene_out, "--scene-out",
+                     "must lie in the scene's own folder (its relative paths to cameras and textures stay valid)");
+}
+
+void write_scene_out(const AlignOptions& o, const PreparedScene& ps, const RigidTransform& camera_from_world) {
+  if (o.scene_out.empty()) return;
+  write_file_atomically(o.scene_out, scene_with_camera_poses(o.scene, {{ps.camera_index, camera_from_world}}));
+  std::printf("wrote %s (camera '%s' with the new pose)\n", o.scene_out.c_str(), ps.camera_name().c_str());
+}
+
+std::vector<OutputFile> outputs_of(const AlignOptions& o) {
+  std::vector<OutputFile> out;
+  if (!o.output.empty()) out.push_back({o.output, "-o"});
+  if (!o.json.empty()) out.push_back({o.json, "--json"});
+  if (!o.scene_out.empty()) out.push_back({o.scene_out, "--scene-out"});
+  return out;
+}
+
+void check_files(const AlignOptions& o, const PreparedScene& ps) {
+  std::vector<std::string> inputs = scene_input_files(ps.scene);
+  inputs.insert(inputs.end(), o.photos.begin(), o.photos.end());
+  check_outputs(inputs, outputs_of(o));
+  check_scene_out(o);
+}
+
+// --- align pose -----------------------------------------------------------------
+void run_pose(const AlignOptions& o) {
+  const PreparedScene ps = prepare_scene(o.scene, o.camera);
+  check_files(o, ps);
+  const std::vector<SceneFiducial> fiducials = scene_fiducials(ps.scene);
+  if (fiducials.empty())
+    throw InputError(o.scene, "solids", "the scene has no fiducials (rectangles whose texture is a target spec)");
+  const CameraModel& model = ps.camera().model;
+  std::vector<FiducialCorner> corners;
+  for (const std::string& photo : o.photos) {
+    cv::Mat gray = read_photo_gray8(photo);
+    if (gray.cols != model.width_px() || gray.rows != model.height_px())
+      throw InputError(photo, "size", fmt::format("is {}x{} px, camera '{}' is {}x{} px", gray.cols, gray.rows,
+                                                  ps.camera_name(), model.width_px(), model.height_px()));
+    const FiducialsInPhoto found = detect_fiducials(gray, fiducials, photo);
+    int seen = 0;
+    for (int n : found.corners_per_fiducial) seen += n > 0;
+    std::printf("%s: %d of %zu fiducials, %zu corners\n", photo.c_str(), seen, fiducials.size(), found.corners.size());
+    for (const std::string& s : found.duplicated_markers) std::printf("  %s seen more than once: not used\n", s.c_str());
+    for (const std::string& s : found.unknown_markers) std::printf("  %s is not in the scene: ignored\n", s.c_str());
+    corners.insert(corners.end(), found.corners.begin(), found.corners.end());
+  }
+  if (corners.empty())
+    throw InputError(o.photos.front(), "fiducials", "none of the scene's fiducials was found in the photos");
+  const std::unique_ptr<SceneIndex> index = make_scene_index(ps.trace);
+  AlignPoseOptions options;
+  options.through_glass = !o.pinhole;
+  options.refine_focal = o.refine_focal;
+  options.threads = 1;
+  const AlignedPose pose = align_pose(ps.trace, *index, ps.info.rectangle_solids, fiducials, model, corners, options);
+  const ExtrinsicFit& fit = pose.fit;
+  std::printf("pose of camera '%s' from %d corners (%d outliers): RMS %.3f px\n", ps.camera_name().c_str(),
+              fit.inlier_count + fit.outlier_count, fit.outlier_count, fit.rms_px);
+  std::printf("  %s\n", describe_pose(fit.camera_from_world).c_str());
+  std::printf("  1-sigma: position [%.4f, %.4f, %.4f] mm, rotation %.5f deg; reciprocal condition %.2g\n",
+              fit.position_sigma_mm.x(), fit.position_sigma_mm.y(), fit.position_sigma_mm.z(), fit.rotation_sigma_deg,
+              fit.reciprocal_condition);
+  if (o.refine_focal) std::printf("  focal scale %.6f (fx %.3f px)\n", fit.focal_scale, fit.camera.fx_px());
+  if (pose.through_glass) {
+    const auto [mm, deg] = pose_change(pose.pinhole.camera_from_world, fit.camera_from_world);
+    std::printf("  through the glass: corners displaced by up to %.3f px; the plain pinhole fit (RMS %.3f px) is off "
+                "by %.4f mm, %.5f deg\n",
+                pose.glass_displacement_px, pose.pinhole.rms_px, mm, deg);
+  }
+  for (const FiducialFit& f : pose.fiducials)
+    std::printf("  %-14s %3d corners  RMS %.3f px  max %.3f px%s\n", f.field.c_str(), f.corners, f.rms_px, f.max_px,
+                f.outliers ? fmt::format("  ({} outliers)", f.outliers).c_str() : "");
+  if (ps.camera().camera_from_world) {
+    const auto [mm, deg] = pose_change(*ps.camera().camera_from_world, fit.camera_from_world);
+    std::printf("  change from the scene's pose: %.4f mm, %.5f deg\n", mm, deg);
+  }
+  nlohmann::json j = {{"camera", ps.camera_name()},
+                      {"pose", pose_json(fit.camera_from_world)},
+                      {"pinhole_pose", pose_json(pose.pinhole.camera_from_world)},
+                      {"rms_px", fit.rms_px},
+                      {"inliers", fit.inlier_count},
+                      {"outliers", fit.outlier_count},
+                      {"position_sigma_mm", {fit.position_sigma_mm.x(), fit.position_sigma_mm.y(), fit.position_sigma_mm.z()}},
+                      {"rotation_sigma_deg", fit.rotation_sigma_deg},
+                      {"glass_displacement_px", pose.glass_displacement_px},
+                      {"focal_scale", fit.focal_scale}};
+  for (const FiducialFit& f : pose.fiducials)
+    j["fiducials"].push_back({{"field", f.field}, {"corners", f.corners}, {"rms_px", f.rms_px}, {"max_px", f.max_px}});
+  write_json(o.json, j);
+  write_scene_out(o, ps, fit.camera_from_world);
+}
+
+// --- align check ----------------------------------------------------------------
+std::string sibling(const std::string& path, const std::string& suffix) {
+  const fs::path p(path);
+  return (p.parent_path() / (p.stem().string() + suffix + p.extension().string())).string();
+}
+
+void write_png(const std::string& path, const cv::Mat& image) {
+  write_file_atomically_with(path, [&](const std::string& tmp) {
+    if (!cv::imwrite(tmp, image, {cv::IMWRITE_PNG_COMPRESSION, 3}))
+      throw InputError(path, "", "cannot write the PNG");
+  });
+}
+
+std::vector<float> render_view(const PreparedScene& ps, const CameraModel& model, const RigidTransform& pose,
+                               const AlignOptions& o, const char* label) {
+  ProgressBar bar(label, static_cast<std::size_t>(model.height_px()));
+  std::vector<float> r = render_setup(ps.trace, look_of(ps), model, pose, trace_options(o), o.samples, o.threads,
+                                      [&](int done, int) { bar.set_done(static_cast<std::size_t>(done)); });
+  bar.finish();
+  return r;
+}
+
+void write_overlays(const std::string& output, const cv::Mat& render, const cv::Mat& photo) {
+  write_png(output, overlay_blend(render, photo));
+  write_png(sibling(output, "_edges"), overlay_edges(render, photo));
+  write_png(sibling(output, "_checker"), overlay_checker(render, photo, std::max(16, photo.cols / 16)));
+  std::printf("wrote %s (photo green, render magenta), %s (rendered edges magenta, photo edges green), %s\n",
+              output.c_str(), sibling(output, "_edges").c_str(), sibling(output, "_checker").c_str());
+}
+
+void print_similarity(const char* what, const Similarity& s) {
+  std::printf("%s: NCC %.4f, gradient NCC %.4f, edge distance %.3f px (render to photo %.3f, photo to render %.3f)\n",
+              what, s.ncc, s.gradient_ncc, s.chamfer_px, s.chamfer_render_to_photo_px, s.chamfer_photo_to_render_px);
+}
+
+nlohmann::json similarity_json(const Similarity& s) {
+  return {{"ncc", s.ncc},
+          {"gradient_ncc", s.gradient_ncc},
+          {"edge_distance_px", s.chamfer_px},
+          {"edge_distance_render_to_photo_px", s.chamfer_render_to_photo_px},
+          {"edge_distance_photo_to_render_px", s.chamfer_photo_to_render_px}};
+}
+
+// Marker corners: detected in the photo vs projected through the model.
+struct CornerDistances {
+  int corners = 0;
+  double rms_px = 0, max_px = 0;
+};
+
+CornerDistances corner_distances(const PreparedScene& ps, const std::vector<SceneFiducial>& fiducials,
+                                 const SceneIndex& index, const CameraModel& model, const RigidTransform& pose,
+                                 const std::string& photo) {
+  CornerDistances d;
+  if (fiducials.empty()) return d;
+  const FiducialsInPhoto found = detect_fiducials(read_photo_gray8(photo), fiducials, photo);
+  double sum2 = 0;
+  for (const FiducialCorner& c : found.corners) {
+    const int solid = ps.info.rectangle_solids[static_cast<std::size_t>(fiducials[static_cast<std::size_t>(c.fiducial)].rectangle)];
+    const auto start = model.project(pose.apply(c.world_mm));
+    if (!start) continue;
+    const TracedProjection t = project_through_scene(ps.trace, index, model, pose, c.world_mm, solid, *start);
+    if (!t.ok()) continue;
+    const double e = (t.pixel_px - c.pixel_px).norm();
+    sum2 += e * e;
+    d.max_px = std::max(d.max_px, e);
+    ++d.corners;
+  }
+  if (d.corners) d.rms_px = std::sqrt(sum2 / d.corners);
+  return d;
+}
+
+void run_check(const AlignOptions& o) {
+  if (lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
+  const PreparedScene ps = prepare_scene(o.scene, o.camera);
+  check_files(o, ps);
+  std::vector<OutputFile> more = {{sibling(o.output, "_edges"), "-o"}, {sibling(o.output, "_checker"), "-o"}};
+  check_outputs(scene_input_files(ps.scene), more);
+  const CameraModel& model = ps.camera().model;
+  const cv::Mat photo = read_photo_values(o.photos.front(), model, ps.camera_name());
+  const RigidTransform pose = *ps.camera().camera_from_world;
+  std::vector<float> radiance = render_view(ps, model, pose, o, "render");
+  const cv::Mat render(model.height_px(), model.width_px(), CV_32F, radiance.data());
+  const Similarity s = compare_render_to_photo(render, photo);
+  print_similarity("score", s);
+  const std::unique_ptr<SceneIndex> index = make_scene_index(ps.trace);
+  const CornerDistances d = corner_distances(ps, scene_fiducials(ps.scene), *index, model, pose, o.photos.front());
+  if (d.corners)
+    std::printf("fiducial corners: %d found, detected vs modelled RMS %.3f px, max %.3f px\n", d.corners, d.rms_px,
+                d.max_px);
+  write_overlays(o.output, render, photo);
+  nlohmann::json j = similarity_json(s);
+  j["camera"] = ps.camera_name();
+  j["fiducial_corners"] = {{"count", d.corners}, {"rms_px", d.rms_px}, {"max_px", d.max_px}};
+  write_json(o.json, j);
+}
+
+// --- align refine ---------------------------------------------------------------
+void run_refine(const AlignOptions& o) {
+  if (!o.output.empty() && lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
+  for (int b : o.levels)
+    if (b < 1 || b > 64) throw InputError("", "--levels", fmt::format("binning {} is not in 1..64", b));
+  const PreparedScene ps = prepare_scene(o.scene, o.camera);
+  check_files(o, ps);
+  const CameraModel& model = ps.camera().model;
+  const cv::Mat photo = read_photo_values(o.photos.front(), model, ps.camera_name());
+  const RigidTransform start = *ps.camera().camera_from_world;
+  RefineParameters parameters;
+  parameters.focal = o.refine_focal;
+  parameters.refractive_index = o.refine_index;
+  parameters.glass_position = o.refine_glass;
+  RefineOptions options;
+  options.binning_levels = o.levels;
+  options.blur_px = o.blur_px;
+  options.trace = trace_options(o);
+  options.threads = o.threads;
+  options.samples_per_axis = 1;
+  std::printf("refining camera '%s' on %s: levels", ps.camera_name().c_str(), o.photos.front().c_str());
+  for (int b : o.levels) std::printf(" %d", b);
+  std::printf(" (binning)\n");
+  const RefineResult r = refine_alignment(ps.trace, look_of(ps), model, start, photo, parameters, options);
+  for (const RefineLevel& l : r.levels)
+    std::printf("  binning %2d (%dx%d): gradient NCC %.4f -> %.4f in %d steps, %d renders, %.1f s\n", l.binning,
+                l.width_px, l.height_px, l.gradient_ncc_before, l.gradient_ncc_after, l.iterations, l.renders,
+                l.seconds);
+  const auto [mm, deg] = pose_change(start, r.camera_from_world);
+  std::printf("refined pose: %s\n  moved %.4f mm, %.5f deg from the start; %d renders in %.1f s\n",
+              describe_pose(r.camera_from_world).c_str(), mm, deg, r.renders, r.seconds);
+  if (o.refine_focal) std::printf("  focal scale %.6f\n", r.focal_scale);
+  if (o.refine_index) std::printf("  refractive index offset %+.5f\n", r.refractive_index_offset);
+  if (o.refine_glass)
+    std::printf("  glass offset [%.4f, %.4f, %.4f] mm\n", r.glass_offset_mm.x(), r.glass_offset_mm.y(),
+                r.glass_offset_mm.z());
+  nlohmann::json j = {{"camera", ps.camera_name()}, {"start", pose_json(start)}, {"pose", pose_json(r.camera_from_world)},
+                      {"focal_scale", r.focal_scale}, {"refractive_index_offset", r.refractive_index_offset},
+                      {"glass_offset_mm", {r.glass_offset_mm.x(), r.glass_offset_mm.y(), r.glass_offset_mm.z()}},
+                      {"renders", r.renders}, {"seconds", r.seconds}};
+  for (const RefineLevel& l : r.levels)
+    j["levels"].push_back({{"binning", l.binning}, {"gradient_ncc_before", l.gradient_ncc_before},
+                           {"gradient_ncc_after", l.gradient_ncc_after}, {"renders", l.renders}, {"seconds", l.seconds}});
+  if (!o.output.empty()) {
+    std::vector<OutputFile> more = {{sibling(o.output, "_edges"), "-o"}, {sibling(o.output, "_checker"), "-o"}};
+    check_outputs(scene_input_files(ps.scene), more);
+    const CameraModel refined_model = scaled_focal(model, r.focal_scale);
+    const TraceScene refined_scene = adjusted_glass(ps.trace, r.refractive_index_offset, r.glass_offset_mm);
+    ProgressBar bar("render", static_cast<std::size_t>(model.height_px()));
+    std::vector<float> radiance = render_setup(refined_scene, look_of(ps), refined_model, r.camera_from_world,
+                                               trace_options(o), o.samples, o.threads,
+                                               [&](int done, int) { bar.set_done(static_cast<std::size_t>(done)); });
+    bar.finish();
+    const cv::Mat render(model.height_px(), model.width_px(), CV_32F, radiance.data());
+    const Similarity after = compare_render_to_photo(render, photo);
+    print_similarity("score after", after);
+    j["after"] = similarity_json(after);
+    write_overlays(o.output, render, photo);
+  }
+  write_json(o.json, j);
+  write_scene_out(o, ps, r.camera_from_world);
+}
+
+void add_common(CLI::App* c, AlignOptions& o, bool many_photos) {
+  c->add_option("SCENE", o.scene, "scene file (docs/scene.md)")->required()->check(CLI::ExistingFile);
+  if (many_photos)
+    c->add_option("PHOTO", o.photos, "photos of the setup taken by the camera (8/16-bit TIFF, PNG, ...)")
+        ->required()
+        ->check(CLI::ExistingFile);
+  else
+    c->add_option("PHOTO", o.photos, "a photo of the setup taken by the camera")
+        ->required()
+        ->expected(1)
+        ->check(CLI::ExistingFile);
+  c->add_option("--camera", o.camera, "the scene's camera that took the photos (default: the first)");
+  c->add_option("--json", o.json, "also write the figures as JSON");
+}
+
+}  // namespace
+
+void register_align_commands(CLI::App& app) {
+  CLI::App* align = app.add_subcommand("align", "place the model on the setup from photographs of it");
+  align->require_subcommand(1);
+  static AlignOptions o;
+
+  CLI::App* pose = align->add_subcommand(
+      "pose", "the camera's pose from the scene's fiducials (ArUco, AprilTag, boards) found in its photos; corners "
+              "seen through glass are projected through the traced model");
+  add_common(pose, o, true);
+  pose->add_option("--scene-out", o.scene_out, "write the scene with the new pose (in the scene's folder)");
+  pose->add_flag("--pinhole", o.pinhole, "plain pinhole projection only (ignore the glass between camera and markers)");
+  pose->add_flag("--refine-focal", o.refine_focal, "also fit one scale on the focal length");
+  pose->callback([] { run_pose(o); });
+
+  CLI::App* check = align->add_subcommand(
+      "check", "render the setup from the camera's pose in the scene, overlay it on the photo and score the overlay");
+  add_common(check, o, false);
+  check->add_option("-o", o.output, "overlay PNG (also <stem>_edges.png and <stem>_checker.png)")->required();
+  check->add_option("--samples", o.samples, "samples per pixel and axis of the render")->check(CLI::Range(1, 16));
+  check->add_flag("--no-reflections", o.no_reflections, "no reflected branches in the render");
+  check->add_option("--threads", o.threads, "threads (0: all)");
+  check->callback([] { run_check(o); });
+
+  CLI::App* refine = align->add_subcommand(
+      "refine", "optimise the camera's pose (and on request focal length, glass index and position) until the render "
+                "of the setup agrees with the photo, coarse to fine");
+  add_common(refine, o, false);
+  refine->add_option("-o", o.output, "overlay PNG after the refinement (also _edges, _checker)");
+  refine->add_option("--scene-out", o.scene_out, "write the scene with the refined pose (in the scene's folder)");
+  refine->add_option("--levels", o.levels, "binning factors, coarse to fine")->delimiter(',');
+  refine->add_option("--blur-px", o.blur_px, "Gaussian blur of the compared gradients, binned px")
+      ->check(CLI::Range(0.0, 20.0));
+  refine->add_flag("--refine-focal", o.refine_focal, "also optimise one scale on the focal length");
+  refine->add_flag("--refine-index", o.refine_index, "also optimise an offset on every glass solid's index");
+  refine->add_flag("--refine-glass", o.refine_glass, "also optimise one translation of all glass solids");
+  refine->add_option("--samples", o.samples, "samples per pixel and axis of the final overlay render")
+      ->check(CLI::Range(1, 16));
+  refine->add_flag("--no-reflections", o.no_reflections, "no reflected branches in the renders");
+  refine->add_option("--threads", o.threads, "threads (0: all)");
+  refine->callback([] { run_refine(o); });
+}
+
+}  // namespace glasspiv
