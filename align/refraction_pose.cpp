@@ -267,9 +267,9 @@ std::function<bool(const RigidTransform&, int, Eigen::Vector2d*)> traced_point_p
     const Eigen::Vector3d& point = points[static_cast<std::size_t>(point_index)];
     const std::optional<Eigen::Vector2d> pinhole = model.project(camera_from_world.apply(point));
     if (!pinhole) return false;
-    const TracedProjection tp = project_through_scene(scene, index, model, camera_from_world, point,
-                                                      targets[static_cast<std::size_t>(point_index)], *pinhole,
-                                                      options);
+    const TracedProjection tp =
+        project_through_scene(scene, index, model, camera_from_world, point,
+                              targets[static_cast<std::size_t>(point_index)], *pinhole, options);
     if (!tp.ok()) return false;
     *pixel_px = tp.pixel_px;
     return true;

@@ -133,7 +133,8 @@ std::vector<Parameter> parameters_of(const ModelTolerances& tol) {
     const double largest = eig.eigenvalues().cwiseAbs().maxCoeff();
     for (int i = 0; i < 6; ++i) {
       const double lambda = eig.eigenvalues()[i];
-      if (lambda < -1e-12 * largest) throw std::invalid_argument("model_sensitivity: pose_covariance is not positive semi-definite");
+      if (lambda < -1e-12 * largest)
+        throw std::invalid_argument("model_sensitivity: pose_covariance is not positive semi-definite");
       if (!(lambda > 0)) continue;
       Perturbation u;
       u.pose_delta = std::sqrt(lambda) * eig.eigenvectors().col(i);
@@ -245,7 +246,8 @@ SensitivityMap model_sensitivity(const TraceScene& scene, const CameraModel& mod
   if (options.grid_step_px < 1) throw std::invalid_argument("model_sensitivity: grid_step_px must be at least 1");
   for (double v : {tol.camera_position_mm, tol.camera_rotation_deg, tol.glass_position_mm, tol.sphere_diameter_mm,
                    tol.refractive_index})
-    if (!(v >= 0) || !std::isfinite(v)) throw std::invalid_argument("model_sensitivity: tolerances must be finite and >= 0");
+    if (!(v >= 0) || !std::isfinite(v))
+      throw std::invalid_argument("model_sensitivity: tolerances must be finite and >= 0");
   const bool monte_carlo = options.method == SensitivityMethod::monte_carlo;
   if (monte_carlo && samples < 2) throw std::invalid_argument("model_sensitivity: monte_carlo needs samples >= 2");
 
@@ -260,7 +262,8 @@ SensitivityMap model_sensitivity(const TraceScene& scene, const CameraModel& mod
   std::vector<Model> plus_minus;  // 2k: +sigma_k, 2k + 1: -sigma_k
   for (const Parameter& p : params)
     for (double sign : {1.0, -1.0})
-      plus_minus.push_back(perturbed_model(nominal_scene, nominal_index, camera_from_world, Perturbation{}.add(p.unit, sign)));
+      plus_minus.push_back(
+          perturbed_model(nominal_scene, nominal_index, camera_from_world, Perturbation{}.add(p.unit, sign)));
   std::vector<Model> draws;
   if (monte_carlo) {
     NormalDraws normal(seed);

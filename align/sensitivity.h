@@ -49,11 +49,11 @@ namespace glasspiv {
 
 // 1-sigma of independent Gaussian errors. A zero figure leaves its parameter out.
 struct ModelTolerances {
-  double camera_position_mm = 0.1;   // camera centre, along each world axis
-  double camera_rotation_deg = 0.02; // about each camera axis, around the camera centre
-  double glass_position_mm = 0.05;   // every glass solid moved together, along each world axis
-  double sphere_diameter_mm = 0.02;  // every glass sphere's diameter, together
-  double refractive_index = 5e-4;    // every glass solid's index, together
+  double camera_position_mm = 0.1;    // camera centre, along each world axis
+  double camera_rotation_deg = 0.02;  // about each camera axis, around the camera centre
+  double glass_position_mm = 0.05;    // every glass solid moved together, along each world axis
+  double sphere_diameter_mm = 0.02;   // every glass sphere's diameter, together
+  double refractive_index = 5e-4;     // every glass solid's index, together
   // Covariance of (angle-axis rad, translation mm) of camera_from_world, as a
   // pose fit reports it (perturbed as rvec + d_rvec, t + d_t along its
   // eigenvectors); replaces camera_position_mm and camera_rotation_deg.
@@ -64,8 +64,8 @@ enum class SensitivityMethod { first_order, monte_carlo };
 
 struct SensitivityOptions {
   SensitivityMethod method = SensitivityMethod::first_order;
-  int grid_step_px = 8;  // one sample per block of this many pixels square
-  int threads = 0;       // <= 0: hardware concurrency (render/parallel_rows.h)
+  int grid_step_px = 8;                  // one sample per block of this many pixels square
+  int threads = 0;                       // <= 0: hardware concurrency (render/parallel_rows.h)
   TraceOptions trace{false, 1e-12, 32};  // reflections forced off: the direct crossing only
 };
 
@@ -74,7 +74,7 @@ struct SensitivityParameter {
   std::string name;  // camera_rotation_x|y|z, camera_position_x|y|z, pose_mode_0..5, glass_position_x|y|z,
                      // sphere_diameter, refractive_index
   double sigma = 0;  // its 1-sigma in the unit its name implies (deg, mm, 1; pose modes: 1 = one standard deviation)
-  std::vector<float> displacement_px, displacement_mm;  // per grid point (0 where invalid)
+  std::vector<float> displacement_px, displacement_mm;          // per grid point (0 where invalid)
   double median_px = 0, p95_px = 0, median_mm = 0, p95_mm = 0;  // over the valid grid points
 };
 
@@ -90,6 +90,7 @@ struct SensitivityMap {
   std::vector<SensitivityParameter> parameters;
   int valid_points = 0;
   double median_px = 0, p95_px = 0, median_mm = 0, p95_mm = 0;  // of the totals, over valid points
+  // Solids the glass parameters act on (moved, index changed), spheres resized, glass meshes left alone.
   int glass_solids_moved = 0, spheres_resized = 0, skipped_glass_meshes = 0;
 
   // The pixel sampled by grid point (col, row): the centre of its block.

@@ -83,7 +83,8 @@ TEST(Sensitivity, WindowIndexGivesSlabShiftDerivative) {
       const std::size_t i = static_cast<std::size_t>(row * m.width + col);
       const double theta = std::acos(pixel_world_ray(model, pose, m.pixel_px(col, row))->direction.z());
       // Along the sheet (perpendicular to the normal) the shift is shift / cos(theta).
-      const double central = 0.5 * std::abs(slab_shift(d, n + sigma, theta) - slab_shift(d, n - sigma, theta)) / std::cos(theta);
+      const double central =
+          0.5 * std::abs(slab_shift(d, n + sigma, theta) - slab_shift(d, n - sigma, theta)) / std::cos(theta);
       const double s = std::sin(theta);
       const double derivative = d * s * n / std::pow(n * n - s * s, 1.5) * sigma;
       EXPECT_NEAR(p.displacement_mm[i], central, 1e-6 * central + 1e-12);
@@ -174,8 +175,8 @@ void print_table(const char* what, const SensitivityMap& m, double seconds) {
   std::printf("%s: %dx%d grid, %d valid, %.2f s; total median %.4f px %.5f mm, p95 %.4f px %.5f mm\n", what, m.width,
               m.height, m.valid_points, seconds, m.median_px, m.median_mm, m.p95_px, m.p95_mm);
   for (const auto& p : m.parameters)
-    std::printf("  %-20s sigma %-8g median %.4f px %.5f mm  p95 %.4f px %.5f mm\n", p.name.c_str(), p.sigma, p.median_px,
-                p.median_mm, p.p95_px, p.p95_mm);
+    std::printf("  %-20s sigma %-8g median %.4f px %.5f mm  p95 %.4f px %.5f mm\n", p.name.c_str(), p.sigma,
+                p.median_px, p.median_mm, p.p95_px, p.p95_mm);
 }
 
 TEST(Sensitivity, MegapixelCameraTakesSeconds) {
@@ -195,12 +196,14 @@ TEST(Sensitivity, MegapixelCameraTakesSeconds) {
   const CameraModel narrow(1000, 1000, 4000, 4000, 499.5, 499.5);
   const auto t1 = std::chrono::steady_clock::now();
   const SensitivityMap b = model_sensitivity(scene, narrow, near, ModelTolerances{}, 0, 0);
-  print_table("ball lens, first order", b, std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count());
+  print_table("ball lens, first order", b,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count());
   SensitivityOptions mc;
   mc.method = SensitivityMethod::monte_carlo;
   const auto t2 = std::chrono::steady_clock::now();
   const SensitivityMap c = model_sensitivity(scene, narrow, near, ModelTolerances{}, 32, 1, mc);
-  print_table("ball lens, Monte Carlo 32", c, std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count());
+  print_table("ball lens, Monte Carlo 32", c,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count());
   EXPECT_GT(b.valid_points, 0);
 }
 
