@@ -40,7 +40,8 @@ struct TracedProjectionOptions {
 enum class TracedProjectionStatus {
   ok,             // converged: the pixel's refracted path meets target_solid first, at the point to tolerance_mm
   not_converged,  // max_iterations spent, or no step reduced |F| (pixel_px: best iterate, not an observation)
-  blocked,        // the path meets another opaque solid first: the point is hidden from this camera
+  blocked,        // the path meets another opaque solid first (at start_px, or wherever a step led): the point
+                  // is hidden, at least along the images reachable from start_px
   left_image,     // the solution lies outside the image [-0.5, width - 0.5] x [-0.5, height - 0.5]
   no_path,        // the refracted path does not reach the target plane: total internal reflection, cut by
                   // depth, a pixel the lens cannot unproject, or the point is not on the rectangle
@@ -51,7 +52,7 @@ const char* to_string(TracedProjectionStatus status);
 struct TracedProjection {
   TracedProjectionStatus status = TracedProjectionStatus::no_path;
   Eigen::Vector2d pixel_px = Eigen::Vector2d::Zero();  // meaningful only when ok
-  int iterations = 0;                                  // Newton steps taken
+  int iterations = 0;                                  // Newton steps taken (the final polishing step included)
   double residual_mm = 0;                              // |F| at pixel_px (infinity when no path)
   // d(in-plane point, right and up axes)/d(pixel col, row) at pixel_px, mm per px
   // (central differences); its inverse is d(pixel)/d(in-plane point). Zero unless ok.
