@@ -427,3 +427,309 @@ ExtrinsicFit fit_camera_pose(const CameraModel& camera, const std::vector<PointO
 }
 
 }  // namespace glasspiv
+
+namespace glasspiv {
+namespace {
+
+[[noreturn]] void refuse_rig(const std::string& field, const std::string& problem) {
+  throw InputError("", field, problem);
+}
+
+std::string observation_name(const std::vector<RigObservation>& observations, int i) {
+  const std::string& label = observations[i].label;
+  return "observation " + std::to_string(i) + (label.empty() ? "" : " (" + label + ")");
+}
+
+void validate_rig(const std::vector<RigCamera>& cameras, const std::vector<RigFiducial>& fiducials,
+                  const std::vector<RigObservation>& observations, const RigFitOptions& options) {
+  if (!(options.outlier_k == 0 || (std::isfinite(options.outlier_k) && options.outlier_k >= 1)))
+    throw InputError("", "outlier_k", "must be 0 (off) or a finite number >= 1");
+  if (options.max_iterations < 1) throw InputError("", "max_iterations", "must be at least 1");
+  if (options.num_threads < 1) throw InputError("", "num_threads", "must be at least 1");
+  if (!(std::isfinite(options.max_position_sigma_mm) && options.max_position_sigma_mm > 0))
+    throw InputError("", "max_position_sigma_mm", "must be a finite number > 0");
+  if (!(std::isfinite(options.max_rotation_sigma_deg) && options.max_rotation_sigma_deg > 0))
+    throw InputError("", "max_rotation_sigma_deg", "must be a finite number > 0");
+  if (cameras.empty()) refuse_rig("cameras", "no camera given");
+  if (fiducials.empty()) refuse_rig("fiducials", "no fiducial given");
+  for (std::size_t c = 0; c < cameras.size(); ++c)
+    if (!finite_pose(cameras[c].camera_from_world))
+      refuse_rig("cameras", "camera " + std::to_string(c) + " has a non-finite camera_from_world");
+  bool any_held = false;
+  for (std::size_t f = 0; f < fiducials.size(); ++f) {
+    if (!finite_pose(fiducials[f].world_from_fiducial))
+      refuse_rig("fiducials", "fiducial " + std::to_string(f) + " has a non-finite world_from_fiducial");
+    any_held = any_held || fiducials[f].held;
+  }
+  if (!any_held)
+    refuse_rig("fiducials",
+               "no fiducial is held: with every fiducial and camera free the world frame can move with them all "
+               "(gauge freedom); hold at least one fiducial at its known place");
+  std::vector<int> per_camera(cameras.size(), 0), per_fiducial(fiducials.size(), 0);
+  for (std::size_t i = 0; i < observations.size(); ++i) {
+    const RigObservation& o = observations[i];
+    if (o.camera < 0 || o.camera >= static_cast<int>(cameras.size()))
+      refuse_rig("observations", observation_name(observations, i) + " names camera " + std::to_string(o.camera) +
+                                     " of " + std::to_string(cameras.size()));
+    if (o.fiducial < 0 || o.fiducial >= static_cast<int>(fiducials.size()))
+      refuse_rig("observations", observation_name(observations, i) + " names fiducial " +
+                                     std::to_string(o.fiducial) + " of " + std::to_string(fiducials.size()));
+    if (!o.point_fiducial_mm.allFinite() || !o.pixel_px.allFinite())
+      refuse_rig("observations", observation_name(observations, i) + " has a non-finite point or pixel");
+    ++per_camera[o.camera];
+    ++per_fiducial[o.fiducial];
+  }
+  for (std::size_t c = 0; c < cameras.size(); ++c)
+    if (per_camera[c] < kMinPosePoints)
+      refuse_rig("cameras", "camera " + std::to_string(c) + " has " + std::to_string(per_camera[c]) +
+                                " observations; a camera pose needs at least " + std::to_string(kMinPosePoints));
+  for (std::size_t f = 0; f < fiducials.size(); ++f)
+    if (!fiducials[f].held && per_fiducial[f] == 0)
+      refuse_rig("fiducials", "fiducial " + std::to_string(f) + " is free but no camera sees it");
+}
+
+std::string sigma_problem(const std::string& what, const PoseSigma& sigma, const RigFitOptions& options) {
+  return what + " is not determined: position 1-sigma " + format_number("%.3g", sigma.position_sigma_mm.maxCoeff()) +
+         " mm (limit " + format_number("%g", options.max_position_sigma_mm) + " mm), rotation 1-sigma " +
+         format_number("%.3g", sigma.rotation_sigma_deg) + " deg (limit " +
+         format_number("%g", options.max_rotation_sigma_deg) + " deg)";
+}
+
+}  // namespace
+
+RigFit fit_rig(const std::vector<RigCamera>& cameras, const std::vector<RigFiducial>& fiducials,
+               const std::vector<RigObservation>& observations, const RigFitOptions& options) {
+  silence_ceres_logging();
+  validate_rig(cameras, fiducials, observations, options);
+  const int n = static_cast<int>(observations.size());
+
+  std::vector<PoseBlock> camera_blocks, fiducial_blocks;
+  for (const RigCamera& c : cameras) camera_blocks.push_back(pose_block(c.camera_from_world));
+  for (const RigFiducial& f : fiducials) fiducial_blocks.push_back(pose_block(f.world_from_fiducial));
+
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.enable_fast_removal = true;
+  ceres::Problem problem(problem_options);
+  // A free fiducial has few points (12 for a square seen by 3 cameras) and 6
+  // parameters: in plain least squares one bad corner spreads into its
+  // neighbours, and the first verdict drops good points with it. The first
+  // round's verdict is therefore taken at a Cauchy-loss optimum.
+  const std::unique_ptr<ceres::LossFunction> cauchy(new ceres::CauchyLoss(kRigCauchyScalePx));
+  std::vector<double*> free_blocks;  // cameras, then free fiducials: the covariance's order
+  for (PoseBlock& b : camera_blocks) {
+    problem.AddParameterBlock(b.data(), kPoseParameterCount);
+    free_blocks.push_back(b.data());
+  }
+  std::vector<int> fiducial_slot(fiducials.size(), -1);  // index into free_blocks
+  for (std::size_t f = 0; f < fiducials.size(); ++f) {
+    problem.AddParameterBlock(fiducial_blocks[f].data(), kPoseParameterCount);
+    if (fiducials[f].held) {
+      problem.SetParameterBlockConstant(fiducial_blocks[f].data());
+    } else {
+      fiducial_slot[f] = static_cast<int>(free_blocks.size());
+      free_blocks.push_back(fiducial_blocks[f].data());
+    }
+  }
+  const int parameter_count = kPoseParameterCount * static_cast<int>(free_blocks.size());
+
+  std::vector<FitPoint> fit_points(n);
+  for (int i = 0; i < n; ++i) {
+    const RigObservation& o = observations[i];
+    fit_points[i].cost.reset(RigReprojectionCost::Create(cameras[o.camera].camera, o.pixel_px, o.point_fiducial_mm));
+  }
+  const auto update_residuals = [&] {
+    for (int i = 0; i < n; ++i) {
+      const double* parameters[2] = {camera_blocks[observations[i].camera].data(),
+                                     fiducial_blocks[observations[i].fiducial].data()};
+      double r[2];
+      FitPoint& f = fit_points[i];
+      if (f.cost->Evaluate(parameters, r, nullptr))
+        f.residual_px = Eigen::Vector2d(r[0], r[1]);
+      else
+        f.residual_px.setConstant(std::numeric_limits<double>::infinity());
+    }
+  };
+  const auto add_block = [&](int i, ceres::LossFunction* loss = nullptr) {
+    fit_points[i].block = problem.AddResidualBlock(fit_points[i].cost.get(), loss,
+                                                   camera_blocks[observations[i].camera].data(),
+                                                   fiducial_blocks[observations[i].fiducial].data());
+  };
+  // The inliers' blocks re-added with `loss` (nullptr: plain least squares).
+  const auto set_loss = [&](ceres::LossFunction* loss) {
+    for (int i = 0; i < n; ++i)
+      if (fit_points[i].block) {
+        problem.RemoveResidualBlock(fit_points[i].block);
+        add_block(i, loss);
+      }
+  };
+  // The free parameters must stay determined as observations drop out.
+  const auto check_count = [&](const char* when) {
+    int inliers = 0;
+    for (const FitPoint& f : fit_points) inliers += f.block != nullptr;
+    if (2 * inliers <= parameter_count)
+      refuse_rig("observations", std::to_string(inliers) + " observations" + when + " cannot determine " +
+                                     std::to_string(parameter_count) + " pose parameters (6 per camera and free fiducial)");
+  };
+
+  RigFit fit;
+  update_residuals();
+  double start_sum = 0;
+  int start_count = 0;
+  for (int i = 0; i < n; ++i) {
+    if (fit_points[i].residual_px.allFinite()) {
+      add_block(i);
+      start_sum += fit_points[i].residual_px.squaredNorm();
+      ++start_count;
+    } else {
+      if (options.outlier_k == 0)
+        refuse_rig("observations", observation_name(observations, i) + " is behind its camera at the start poses");
+      fit_points[i].outlier = true;
+    }
+  }
+  check_count(" in front of their cameras at the start");
+  fit.initial_rms_px = std::sqrt(start_sum / start_count);
+
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_SCHUR;  // Ceres picks the fiducials to eliminate
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.function_tolerance = 1e-14;
+  solver_options.gradient_tolerance = 1e-14;
+  solver_options.parameter_tolerance = 1e-14;
+  solver_options.num_threads = options.num_threads;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.minimizer_progress_to_stdout = false;
+
+  const auto solve_once = [&] {
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &problem, &summary);
+    fit.iterations += std::max(0, static_cast<int>(summary.iterations.size()) - 1);
+    fit.solve_time_s += summary.total_time_in_seconds;
+    fit.termination = ceres::TerminationTypeToString(summary.termination_type);
+    if (summary.termination_type == ceres::FAILURE)
+      refuse_rig("observations", "the solver failed (" + summary.message +
+                                     "): check that the pixels belong to the fiducial points and the start poses");
+  };
+  const auto solve = [&](int round) {
+    solve_once();
+    if (round == 0 && options.outlier_k > 0) {  // from the least-squares optimum to the robust one
+      set_loss(cauchy.get());
+      solve_once();
+      set_loss(nullptr);
+    }
+    for (double* b : free_blocks)
+      for (int k = 0; k < kPoseParameterCount; ++k)
+        if (!std::isfinite(b[k])) refuse_rig("observations", "the fit diverged (non-finite pose)");
+    update_residuals();
+  };
+  const auto candidates = [&] {
+    std::vector<OutlierCandidate> out;
+    for (const FitPoint& f : fit_points) out.push_back({f.residual_px.norm(), f.block == nullptr});
+    return out;
+  };
+  const auto apply = [&](const OutlierVerdict& verdict) {
+    for (int i = 0; i < n; ++i) {
+      FitPoint& f = fit_points[i];
+      if (verdict.outlier[i] && f.block) {
+        problem.RemoveResidualBlock(f.block);
+        f.block = nullptr;
+      } else if (!verdict.outlier[i] && !f.block) {
+        add_block(i);
+      }
+      f.outlier = verdict.outlier[i];
+    }
+    check_count(" left after outlier rejection");
+  };
+  fit.rounds = run_outlier_rounds(options.outlier_k, solve, candidates, apply).rounds;
+  if (fit.rounds == 1 && options.outlier_k > 0) {  // the first verdict kept every point: the robust optimum
+    solve_once();                                  // is not the least-squares one
+    update_residuals();
+  }
+
+  // --- The poses and their checks.
+  for (const PoseBlock& b : camera_blocks) fit.camera_from_world.push_back(pose_from_block(b.data()));
+  for (std::size_t f = 0; f < fiducials.size(); ++f)
+    fit.world_from_fiducial.push_back(fiducials[f].held ? fiducials[f].world_from_fiducial
+                                                        : pose_from_block(fiducial_blocks[f].data()));
+  for (int i = 0; i < n; ++i) {
+    const RigObservation& o = observations[i];
+    const Eigen::Vector3d p = fit.camera_from_world[o.camera].apply(fit.world_from_fiducial[o.fiducial].apply(o.point_fiducial_mm));
+    if (!(p.z() > 0))
+      refuse_rig("observations", observation_name(observations, i) + " lies behind camera " +
+                                     std::to_string(o.camera) + " at the fitted poses");
+  }
+
+  // --- Residual statistics.
+  fit.camera_points.assign(cameras.size(), 0);
+  fit.fiducial_points.assign(fiducials.size(), 0);
+  std::vector<double> camera_sum(cameras.size(), 0), fiducial_sum(fiducials.size(), 0);
+  double sum_squares = 0;
+  for (int i = 0; i < n; ++i) {
+    const RigObservation& o = observations[i];
+    const FitPoint& f = fit_points[i];
+    const bool outlier = f.block == nullptr;
+    fit.residuals.push_back({i, o.camera, o.fiducial, f.residual_px, outlier});
+    if (outlier) {
+      ++fit.outlier_count;
+      continue;
+    }
+    const double r2 = f.residual_px.squaredNorm();
+    ++fit.inlier_count;
+    sum_squares += r2;
+    ++fit.camera_points[o.camera];
+    camera_sum[o.camera] += r2;
+    ++fit.fiducial_points[o.fiducial];
+    fiducial_sum[o.fiducial] += r2;
+  }
+  const auto rms = [](double sum, int count) {
+    return count > 0 ? std::sqrt(sum / count) : std::numeric_limits<double>::quiet_NaN();
+  };
+  for (std::size_t c = 0; c < cameras.size(); ++c) fit.camera_rms_px.push_back(rms(camera_sum[c], fit.camera_points[c]));
+  for (std::size_t f = 0; f < fiducials.size(); ++f)
+    fit.fiducial_rms_px.push_back(rms(fiducial_sum[f], fit.fiducial_points[f]));
+  fit.rms_px = std::sqrt(sum_squares / fit.inlier_count);
+  fit.sigma_px = std::sqrt(sum_squares / (2 * fit.inlier_count - parameter_count));
+
+  // --- Covariance of all free poses at max(sigma_px, floor).
+  const double covariance_sigma = std::max(fit.sigma_px, kObservabilitySigmaFloorPx);
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.parameter_blocks = free_blocks;
+  for (const FitPoint& f : fit_points)
+    if (f.block) evaluate.residual_blocks.push_back(f.block);
+  evaluate.num_threads = options.num_threads;
+  ceres::CRSMatrix jacobian;
+  if (!problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian))
+    refuse_rig("observations", "the Jacobian at the fitted poses cannot be evaluated");
+  const MarginalCovariance covariance = marginal_covariance(jacobian, parameter_count, {}, {}, covariance_sigma);
+  fit.reciprocal_condition = covariance.reciprocal_condition;
+  if (covariance.covariance.size() == 0 || covariance.undetermined.cols() > 0)
+    refuse_rig("observations", "the rig is not determined: the normal equations are singular (reciprocal condition " +
+                                   format_number("%.1e", covariance.reciprocal_condition) +
+                                   "); every free fiducial needs 3 or more points seen, and every camera 4 or more");
+  const auto block_covariance = [&](int slot) {
+    return Eigen::MatrixXd(covariance.covariance.block(kPoseParameterCount * slot, kPoseParameterCount * slot,
+                                                       kPoseParameterCount, kPoseParameterCount));
+  };
+  for (std::size_t c = 0; c < cameras.size(); ++c) {
+    const PoseSigma sigma = camera_centre_sigma(fit.camera_from_world[c], block_covariance(static_cast<int>(c)));
+    if (!(sigma.position_sigma_mm.maxCoeff() <= options.max_position_sigma_mm &&
+          sigma.rotation_sigma_deg <= options.max_rotation_sigma_deg))
+      refuse_rig("cameras", sigma_problem("camera " + std::to_string(c), sigma, options));
+    fit.camera_sigma.push_back(sigma);
+  }
+  for (std::size_t f = 0; f < fiducials.size(); ++f) {
+    if (fiducial_slot[f] < 0) {
+      fit.fiducial_sigma.push_back({});
+      continue;
+    }
+    const PoseSigma sigma = origin_sigma(fit.world_from_fiducial[f], block_covariance(fiducial_slot[f]));
+    if (!(sigma.position_sigma_mm.maxCoeff() <= options.max_position_sigma_mm &&
+          sigma.rotation_sigma_deg <= options.max_rotation_sigma_deg))
+      refuse_rig("fiducials", sigma_problem("fiducial " + std::to_string(f), sigma, options));
+    fit.fiducial_sigma.push_back(sigma);
+  }
+  return fit;
+}
+
+}  // namespace glasspiv

@@ -122,7 +122,17 @@ PoseSigma origin_sigma(const RigidTransform& destination_from_source, const Eige
 // Fiducials are held (world_from_fiducial known: they fix the world frame) or
 // free (estimated). At least one must be held, else the world frame floats
 // (gauge freedom): refused. Cameras start at their camera_from_world (e.g. from
-// fit_camera_pose) and are all free; intrinsics are held.
+// fit_camera_pose) and are all free; intrinsics are held. Ceres DENSE_SCHUR
+// (trust region); the outlier rounds as in fit_camera_pose, except that the
+// first verdict is taken at a Cauchy-loss optimum (scale kRigCauchyScalePx): a
+// free fiducial has few points, and in least squares one bad corner drags its
+// neighbours past the threshold. The result is always the least-squares fit of
+// the inliers. The covariance covers every free block jointly.
+//
+// Throws InputError (file ""): field "fiducials" (none held, a free one unseen
+// or undetermined), "cameras" (fewer than 4 observations, undetermined),
+// "observations" (indices out of range, non-finite, behind a camera, a singular
+// problem, too few observations left), or the offending option.
 struct RigCamera {
   CameraModel camera;
   RigidTransform camera_from_world;  // the start
@@ -175,6 +185,9 @@ struct RigFit {
   double solve_time_s = 0;
   std::string termination;
 };
+
+// The Cauchy loss scale of the rig's first outlier verdict (see fit_rig).
+constexpr double kRigCauchyScalePx = 1.0;
 
 RigFit fit_rig(const std::vector<RigCamera>& cameras, const std::vector<RigFiducial>& fiducials,
                const std::vector<RigObservation>& observations, const RigFitOptions& options = {});

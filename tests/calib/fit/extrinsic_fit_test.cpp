@@ -313,5 +313,130 @@ TEST(ExtrinsicFit, CovariancePredictsTheScatter) {
   std::cout << "Monte Carlo observed / predicted std (rvec x3, t x3, centre x3): " << ratio.transpose() << "\n";
 }
 
+
+// --- The rig bundle: three cameras around the 20 markers, each marker a
+// fiducial with its corners at (+-20, +-20, 0) in its own frame, tilted; markers
+// 0, 7, 12 held at their places, the rest free. Cameras and free markers start
+// off by millimetres and hundredths of a radian.
+struct Rig {
+  std::vector<RigidTransform> camera_from_world, world_from_fiducial;  // truth
+  std::vector<RigCamera> cameras;
+  std::vector<RigFiducial> fiducials;
+  std::vector<RigObservation> observations;
+};
+
+Rig make_rig(double noise_px, unsigned seed) {
+  Rig rig;
+  const CameraModel camera = testing::truth_opencv5();
+  const Eigen::Vector3d t(-30, 20, 1300);
+  for (const Eigen::Vector3d& rvec :
+       {Eigen::Vector3d(0.12, -0.18, 0.05), Eigen::Vector3d(-0.1, 0.2, 0.0), Eigen::Vector3d(0.05, 0.05, 0.3)})
+    rig.camera_from_world.push_back(RigidTransform::from_rvec_tvec(rvec, t));
+  for (int m = 0; m < kMarkers; ++m) {
+    const Eigen::Vector3d centre((m % 5 - 2) * 160.0, (m / 5 - 1.5) * 160.0, 90 * std::sin(1.7 * m));
+    rig.world_from_fiducial.push_back(RigidTransform::from_rvec_tvec(
+        Eigen::Vector3d(0.2 * std::sin(m), 0.2 * std::cos(m), 0.1 * m), centre));
+  }
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0, noise_px), offset(0, 1);
+  const auto perturbed = [&](const RigidTransform& pose, double mm, double rad) {
+    return RigidTransform::from_rvec_tvec(pose.rvec() + rad * Eigen::Vector3d(offset(rng), offset(rng), offset(rng)),
+                                          pose.translation_mm + mm * Eigen::Vector3d(offset(rng), offset(rng), offset(rng)));
+  };
+  for (const RigidTransform& pose : rig.camera_from_world) rig.cameras.push_back({camera, perturbed(pose, 5, 0.01)});
+  for (int m = 0; m < kMarkers; ++m) {
+    const bool held = m == 0 || m == 7 || m == 12;
+    rig.fiducials.push_back({held ? rig.world_from_fiducial[m] : perturbed(rig.world_from_fiducial[m], 2, 0.02), held});
+  }
+  for (int c = 0; c < 3; ++c)
+    for (int m = 0; m < kMarkers; ++m)
+      for (int k = 0; k < kCornersPerMarker; ++k) {
+        const Eigen::Vector3d point(k == 1 || k == 2 ? 20 : -20, k >= 2 ? 20 : -20, 0);
+        const std::optional<Eigen::Vector2d> pixel =
+            camera.project(rig.camera_from_world[c].apply(rig.world_from_fiducial[m].apply(point)));
+        EXPECT_TRUE(pixel && pixel->x() > 0 && pixel->y() > 0 && pixel->x() < camera.width_px() - 1 &&
+                    pixel->y() < camera.height_px() - 1);
+        rig.observations.push_back({c, m, point, *pixel + Eigen::Vector2d(noise(rng), noise(rng)),
+                                    "camera " + std::to_string(c) + " marker " + std::to_string(m)});
+      }
+  return rig;
+}
+
+TEST(RigFit, RecoversCamerasAndFreeFiducials) {
+  const Rig rig = make_rig(kNoisePx, 20);
+  const RigFit fit = fit_rig(rig.cameras, rig.fiducials, rig.observations);
+  EXPECT_EQ(fit.termination, "CONVERGENCE");
+  EXPECT_EQ(fit.outlier_count, 0);
+  EXPECT_NEAR(fit.sigma_px, kNoisePx, 0.25 * kNoisePx);
+  EXPECT_GT(fit.initial_rms_px, 10 * fit.rms_px);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(fit.camera_points[c], kMarkers * kCornersPerMarker);
+    // 120 free parameters for 480 residuals: the RMS is sqrt(2 (480 - 120) / 480) sigma.
+    EXPECT_NEAR(fit.camera_rms_px[c], fit.rms_px, 0.3 * kNoisePx);
+    const Eigen::Vector3d error = centre(fit.camera_from_world[c]) - centre(rig.camera_from_world[c]);
+    for (int i = 0; i < 3; ++i) EXPECT_LT(std::abs(error(i)), 4 * fit.camera_sigma[c].position_sigma_mm(i));
+    std::cout << "rig camera " << c << ": centre error " << error.transpose() << " mm, 1-sigma "
+              << fit.camera_sigma[c].position_sigma_mm.transpose() << " mm, rms " << fit.camera_rms_px[c] << " px\n";
+  }
+  for (int m = 0; m < kMarkers; ++m) {
+    EXPECT_EQ(fit.fiducial_points[m], 3 * kCornersPerMarker);
+    const Eigen::Vector3d error = fit.world_from_fiducial[m].translation_mm - rig.world_from_fiducial[m].translation_mm;
+    if (rig.fiducials[m].held) {
+      EXPECT_EQ(error.norm(), 0.0);
+      EXPECT_EQ(fit.fiducial_sigma[m].position_sigma_mm.norm(), 0.0);
+      continue;
+    }
+    for (int i = 0; i < 3; ++i) EXPECT_LT(std::abs(error(i)), 4 * fit.fiducial_sigma[m].position_sigma_mm(i));
+  }
+}
+
+TEST(RigFit, DropsAnOutlier) {
+  Rig rig = make_rig(kNoisePx, 21);
+  rig.observations[100].pixel_px += Eigen::Vector2d(15, -12);
+  const RigFit fit = fit_rig(rig.cameras, rig.fiducials, rig.observations);
+  EXPECT_EQ(fit.outlier_count, 1);
+  EXPECT_TRUE(fit.residuals[100].outlier);
+  EXPECT_EQ(fit.camera_points[rig.observations[100].camera], kMarkers * kCornersPerMarker - 1);
+}
+
+void expect_rig_refused(const Rig& rig, const std::string& field, const std::string& words) {
+  try {
+    fit_rig(rig.cameras, rig.fiducials, rig.observations);
+    ADD_FAILURE() << "not refused; expected \"" << words << "\"";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), field);
+    EXPECT_NE(e.problem().find(words), std::string::npos) << e.problem();
+    std::cout << "refused: " << e.problem() << "\n";
+  }
+}
+
+TEST(RigFit, RefusesGaugeFreedomAndUnseenFiducials) {
+  Rig free_rig = make_rig(kNoisePx, 22);
+  for (RigFiducial& f : free_rig.fiducials) f.held = false;
+  expect_rig_refused(free_rig, "fiducials", "gauge freedom");
+
+  Rig unseen = make_rig(kNoisePx, 23);
+  unseen.observations.erase(std::remove_if(unseen.observations.begin(), unseen.observations.end(),
+                                           [](const RigObservation& o) { return o.fiducial == 5; }),
+                            unseen.observations.end());
+  expect_rig_refused(unseen, "fiducials", "fiducial 5 is free but no camera sees it");
+
+  // A free marker seen by one camera only, its corners all but on top of each
+  // other: its place is not determined.
+  Rig weak = make_rig(kNoisePx, 24);
+  std::vector<RigObservation> kept;
+  for (RigObservation o : weak.observations) {
+    if (o.fiducial == 9 && o.camera != 0) continue;
+    if (o.fiducial == 9) o.point_fiducial_mm *= 0.01;
+    kept.push_back(o);
+  }
+  weak.observations = kept;
+  // The pixels of marker 9 then belong to its shrunk corners at the truth.
+  for (RigObservation& o : weak.observations)
+    if (o.fiducial == 9)
+      o.pixel_px = *testing::truth_opencv5().project(
+          weak.camera_from_world[0].apply(weak.world_from_fiducial[9].apply(o.point_fiducial_mm)));
+  expect_rig_refused(weak, "fiducials", "fiducial 9 is not determined: position 1-sigma");
+}
 }  // namespace
 }  // namespace glasspiv
