@@ -85,10 +85,18 @@ class EdgeDistanceIndex {
   const std::vector<EdgePoint>& points() const { return points_; }
 
  private:
+  struct Packed { float x, y, nx, ny; };
   std::vector<EdgePoint> points_;  // sorted by cell
+  std::vector<Packed> packed_;     // the same, what the search reads
   std::vector<int> cell_start_;    // cells_x_ * cells_y_ + 1 offsets into points_
   int cells_x_ = 0, cells_y_ = 0;
-  double cell_px_ = 4, cutoff_px_ = 10;
+  double cell_px_ = 2, cutoff_px_ = 10;
+};
+
+// Buffers of one evaluation (9 bytes per pixel), kept between calls so that an
+// optimiser's evaluations allocate nothing; one per thread.
+struct SimilarityWorkspace {
+  cv::Mat blurred, gradient, flags;
 };
 
 // The photo side, built once: its blurred gradient magnitude with the sums the
@@ -105,7 +113,10 @@ class PhotoEdgeModel {
                           const cv::Mat& mask8u = cv::Mat());
 
   // Throws std::invalid_argument unless render32f is CV_32FC1 of the photo's size.
+  // With a workspace kept by the caller nothing is allocated per call (at 1 MP
+  // fresh buffers cost more than the evaluation itself); results are identical.
   Similarity compare(const cv::Mat& render32f) const;
+  Similarity compare(const cv::Mat& render32f, SimilarityWorkspace& workspace) const;
 
   cv::Size size() const { return size_; }
   const SimilarityOptions& options() const { return options_; }
@@ -126,12 +137,12 @@ class PhotoEdgeModel {
   friend struct SimilarityDetail;
 };
 
-// One-off comparison (builds a PhotoEdgeModel); mask8u as there.
 // The feature gradient_ncc compares: |gradient| by central differences of the
 // image blurred by sigma_px (0 on the outer 1 px frame). For callers that
 // compare per pixel (align/align_refine.h's least squares).
 cv::Mat blurred_gradient_magnitude(const cv::Mat& image32f, double sigma_px);
 
+// One-off comparison (builds a PhotoEdgeModel); mask8u as there.
 Similarity compare_render_to_photo(const cv::Mat& render32f, const cv::Mat& photo32f,
                                    const SimilarityOptions& options = {}, const cv::Mat& mask8u = cv::Mat());
 
