@@ -14,6 +14,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "targets/marker_detect.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
@@ -370,10 +371,13 @@ struct TargetDetector::Impl {
   CharucoLayoutModel model, other_model;  // the requested layout, and the other one
   // aprilgrid
   std::unique_ptr<AprilTagDetector> apriltag;
+  // aruco_marker, apriltag
+  std::unique_ptr<MarkerDetector> markers;
 
   DetectionResult detect_chessboard(const cv::Mat& gray, DetectionResult result) const;
   DetectionResult detect_charuco(const cv::Mat& gray, DetectionResult result) const;
   DetectionResult detect_aprilgrid(const cv::Mat& gray, DetectionResult result) const;
+  DetectionResult detect_single_marker(const cv::Mat& gray, const std::string& source, DetectionResult result) const;
   CornerObservation observation(int id, double x, double y) const {
     CornerObservation o;
     o.id = id;
@@ -399,6 +403,8 @@ TargetDetector::TargetDetector(const TargetSpec& spec, DetectOptions options) : 
     impl_->other_model = make_charuco_model(other, *impl_->dictionary);
   } else if (spec.kind == TargetKind::aprilgrid) {
     impl_->apriltag = std::make_unique<AprilTagDetector>();
+  } else if (is_single_marker(spec.kind)) {
+    impl_->markers = std::make_unique<MarkerDetector>(spec.dictionary);
   }
 }
 
@@ -418,6 +424,8 @@ DetectionResult TargetDetector::detect(const cv::Mat& gray, const std::string& s
     case TargetKind::chessboard: result = impl_->detect_chessboard(gray, std::move(result)); break;
     case TargetKind::charuco: result = impl_->detect_charuco(gray, std::move(result)); break;
     case TargetKind::aprilgrid: result = impl_->detect_aprilgrid(gray, std::move(result)); break;
+    case TargetKind::aruco_marker:
+    case TargetKind::apriltag: result = impl_->detect_single_marker(gray, source, std::move(result)); break;
   }
   sort_by_id(result.view.corners);
   return result;
@@ -598,6 +606,29 @@ DetectionResult TargetDetector::Impl::detect_aprilgrid(const cv::Mat& gray, Dete
       const Eigen::Vector2d& p = tags[index][static_cast<std::size_t>(k)];
       result.view.corners.push_back(observation(4 * index + k, p.x(), p.y()));
     }
+  return result;
+}
+
+// The marker of the spec's id among all of its dictionary (detect_markers: the
+// same detection and corner refinement).
+DetectionResult TargetDetector::Impl::detect_single_marker(const cv::Mat& gray, const std::string& source,
+                                                           DetectionResult result) const {
+  const MarkerDetection found = markers->detect(gray, source);
+  const int id = spec.first_id;
+  if (std::binary_search(found.duplicated_ids.begin(), found.duplicated_ids.end(), id)) {
+    result.note = fmt::format("{} id {} is seen more than once; which one is the target?", spec.dictionary, id);
+    return result;
+  }
+  for (const DetectedMarker& m : found.markers) {
+    if (m.id != id) continue;
+    result.markers_found = 1;
+    for (int k = 0; k < 4; ++k)
+      result.view.corners.push_back(
+          observation(k, m.corners_px[static_cast<std::size_t>(k)].x(), m.corners_px[static_cast<std::size_t>(k)].y()));
+    return result;
+  }
+  result.note = fmt::format("{} id {} not found ({} other markers of the dictionary seen)", spec.dictionary, id,
+                            found.markers.size());
   return result;
 }
 

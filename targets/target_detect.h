@@ -3,6 +3,8 @@
 // glasspiv's convention ((0, 0) = the centre of the top-left pixel; libapriltag's
 // and OpenCV 4.6 ChArUco's half-pixel offsets are removed here) and corner ids
 // and board points as board_corners() defines them. See docs/targets.md.
+// Single markers (aruco_marker, apriltag) are found by detect_markers()
+// (targets/marker_detect.h), their corners refined by its edge fit.
 #include <memory>
 #include <string>
 
@@ -39,13 +41,14 @@ struct DetectOptions {
 
 struct DetectionResult {
   ViewObservations view;   // corners sorted by id; empty when the target was not found
-  int markers_found = 0;   // charuco markers / apriltags of the board decoded
+  int markers_found = 0;   // charuco markers / apriltags of the board decoded (single markers: 0 or 1)
   std::string note;        // why corners were dropped or none were found; "" otherwise
 };
 
 // Holds what a target's detector builds once (dictionary, board, libapriltag
 // detector) for many photos. detect() is const but not thread-safe for
-// aprilgrids (libapriltag's detector holds state): use one detector per thread.
+// aprilgrids and apriltags (libapriltag's detector holds state): use one
+// detector per thread.
 class TargetDetector {
  public:
   explicit TargetDetector(const TargetSpec& spec, DetectOptions options = {});

@@ -5,9 +5,11 @@
 #include <cmath>
 #include <cstdint>
 
+#include <apriltag/apriltag.h>
 #include <fmt/format.h>
 #include <opencv2/aruco/dictionary.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "util/atomic_file.h"
 #include "util/input_error.h"
@@ -21,6 +23,49 @@ constexpr double kMaxMegapixels = 500.0;
 cv::Ptr<cv::aruco::Dictionary> marker_dictionary(const TargetSpec& spec) {
   const std::string name = spec.kind == TargetKind::aprilgrid ? "DICT_APRILTAG_36h11" : spec.dictionary;
   return cv::aruco::getPredefinedDictionary(opencv_dictionary_id(name));
+}
+
+// Tag `id` of a libapriltag family drawn as libapriltag's apriltag_to_image()
+// draws it (that function's image cannot be freed through the library's
+// exported symbols): black, a one-bit white ring `width_at_border` (+ 2 for
+// normal borders) wide, and the code's set bits white at (bit_x, bit_y) from
+// the detected square's corner, most significant bit first. Cropped to the
+// printed pattern (apriltag_family_info): 0 = black, 255 = white.
+cv::Mat apriltag_cells(const std::string& family_name, int id) {
+  const AprilTagFamilyPtr family = create_apriltag_family(family_name);
+  if (!family)
+    throw InputError("", "dictionary",
+                     "'" + family_name + "' is not an AprilTag family (" + apriltag_family_names() + ")");
+  const AprilTagFamilyInfo info = apriltag_family_info(family_name);
+  const int total = family->total_width, border = family->width_at_border;
+  cv::Mat full(total, total, CV_8UC1, cv::Scalar(0));
+  const int ring = border + (family->reversed_border ? 0 : 2);
+  const int ring_start = (total - ring) / 2;
+  cv::rectangle(full, cv::Rect(ring_start, ring_start, ring, ring), cv::Scalar(255), 1);
+  const int border_start = (total - border) / 2;
+  const std::uint64_t code = family->codes[id];
+  for (std::uint32_t i = 0; i < family->nbits; ++i)
+    if (code & (std::uint64_t{1} << (family->nbits - i - 1)))
+      full.at<unsigned char>(static_cast<std::int32_t>(family->bit_y[i]) + border_start,
+                             static_cast<std::int32_t>(family->bit_x[i]) + border_start) = 255;
+  const int skip = (total - info.pattern_cells) / 2;  // the white ring of normal borders is the margin's
+  return full(cv::Rect(skip, skip, info.pattern_cells, info.pattern_cells)).clone();
+}
+
+// Each row's runs of black cells as rectangles, the pattern's top-left at `origin`.
+void add_black_cells(const cv::Mat& cells, const Eigen::Vector2d& origin, double cell, std::vector<BoardRect>& rects) {
+  for (int y = 0; y < cells.rows; ++y) {
+    for (int x = 0; x < cells.cols;) {
+      if (cells.at<unsigned char>(y, x) != 0) {
+        ++x;
+        continue;
+      }
+      int end = x;
+      while (end < cells.cols && cells.at<unsigned char>(y, end) == 0) ++end;
+      rects.push_back({origin.x() + x * cell, origin.y() + y * cell, origin.x() + end * cell, origin.y() + (y + 1) * cell});
+      x = end;
+    }
+  }
 }
 
 // Text for SVG: shortest exact decimal, rounded to 1 nm so sums like 0.1 + 0.2
@@ -71,6 +116,17 @@ std::vector<std::string> caption_lines(const TargetSpec& spec) {
                                   mm(spec.square_size_mm), mm(spec.marker_size_mm)));
       lines.push_back(fmt::format("dictionary {}, first id {}", spec.dictionary, spec.first_id));
       break;
+    case TargetKind::aruco_marker:
+      lines.push_back(fmt::format("ArUco marker {} id {}, marker {} mm (its black border)", spec.dictionary,
+                                  spec.first_id, mm(spec.marker_size_mm)));
+      break;
+    case TargetKind::apriltag: {
+      const AprilTagFamilyInfo f = apriltag_family_info(spec.dictionary);
+      lines.push_back(fmt::format("AprilTag {} id {}, tag size {} mm ({}the detected square, {} bits)",
+                                  spec.dictionary, spec.first_id, mm(spec.marker_size_mm),
+                                  f.reversed_border ? "inside the black ring: " : "black border: ", f.border_cells));
+      break;
+    }
   }
   lines.push_back("print at 100% scale; check: this bar is 100 mm");
   return lines;
@@ -129,6 +185,20 @@ std::vector<unsigned char> png_with_dpi(const cv::Mat& image, double dpi) {
 
 std::vector<BoardRect> target_black_rects(const TargetSpec& spec) {
   std::vector<BoardRect> rects;
+  if (spec.kind == TargetKind::aruco_marker) {
+    const cv::Ptr<cv::aruco::Dictionary> dictionary = marker_dictionary(spec);
+    const int cells = dictionary->markerSize + 2;  // data bits and the one-bit black border
+    cv::Mat bits;
+    dictionary->drawMarker(spec.first_id, cells, bits, 1);  // one pixel per cell, 0 = black
+    add_black_cells(bits, Eigen::Vector2d::Zero(), spec.marker_size_mm / cells, rects);
+    return rects;
+  }
+  if (spec.kind == TargetKind::apriltag) {
+    const AprilTagFamilyInfo f = apriltag_family_info(spec.dictionary);
+    add_black_cells(apriltag_cells(spec.dictionary, spec.first_id), Eigen::Vector2d::Zero(),
+                    spec.marker_size_mm / f.border_cells, rects);
+    return rects;
+  }
   if (spec.kind != TargetKind::aprilgrid) {
     const double s = spec.square_size_mm;
     for (int r = 0; r < spec.squares_y; ++r)
@@ -141,25 +211,21 @@ std::vector<BoardRect> target_black_rects(const TargetSpec& spec) {
   for (const BoardMarker& m : board_markers(spec)) {
     cv::Mat bits;
     dictionary->drawMarker(m.id, cells, bits, 1);  // one pixel per cell, 0 = black
-    const double cell = m.size_mm / cells;
-    for (int y = 0; y < cells; ++y) {
-      for (int x = 0; x < cells;) {
-        if (bits.at<unsigned char>(y, x) != 0) {
-          ++x;
-          continue;
-        }
-        int end = x;
-        while (end < cells && bits.at<unsigned char>(y, end) == 0) ++end;
-        rects.push_back({m.top_left_mm.x() + x * cell, m.top_left_mm.y() + y * cell, m.top_left_mm.x() + end * cell,
-                         m.top_left_mm.y() + (y + 1) * cell});
-        x = end;
-      }
-    }
+    add_black_cells(bits, m.top_left_mm, m.size_mm / cells, rects);
   }
   return rects;
 }
 
 double default_margin_mm(const TargetSpec& spec) {
+  // Single markers: two cells (bits). Both detectors need a white quiet zone
+  // of at least one cell around the black border (libapriltag draws exactly
+  // one; ArUco must see the border as a closed dark contour) and the corner
+  // refinement reads the edge half a cell to each side; the second cell is
+  // slack for cutting and gluing.
+  if (spec.kind == TargetKind::aruco_marker)
+    return 2 * spec.marker_size_mm / (marker_dictionary(spec)->markerSize + 2);
+  if (spec.kind == TargetKind::apriltag)
+    return 2 * spec.marker_size_mm / apriltag_family_info(spec.dictionary).border_cells;
   if (spec.kind == TargetKind::aprilgrid) return std::max(spec.marker_size_mm, spec.square_size_mm / 4);
   return spec.square_size_mm / 2;
 }

@@ -18,11 +18,16 @@ struct BoardRect {
 };
 // The black squares, and the black cells of every marker or tag (each row of a
 // marker's adjacent black cells merged into one rectangle). They do not overlap.
+// ArUco markers are OpenCV's drawMarker bits; single AprilTags libapriltag's
+// own (apriltag_to_image: the layout libapriltag decodes), while an
+// aprilgrid's tags are OpenCV's DICT_APRILTAG_36h11 (the same codes turned by
+// 180 degrees; docs/targets.md).
 std::vector<BoardRect> target_black_rects(const TargetSpec& spec);
 
 // The white margin pictures get by default, the quiet zone the detectors need
 // around the pattern: half a square (chessboard, charuco), or the gap between
-// tags but at least two of their bits (aprilgrid).
+// tags but at least two of their bits (aprilgrid), two cells (bits) of the
+// marker (aruco_marker, apriltag).
 double default_margin_mm(const TargetSpec& spec);
 
 struct TargetRender {

@@ -2,6 +2,12 @@
 
 #include <cmath>
 
+#include <apriltag/apriltag.h>
+#include <apriltag/tag16h5.h>
+#include <apriltag/tag25h9.h>
+#include <apriltag/tag36h11.h>
+#include <apriltag/tagCircle21h7.h>
+#include <apriltag/tagStandard41h12.h>
 #include <fmt/format.h>
 #include <opencv2/aruco/dictionary.hpp>
 
@@ -39,13 +45,47 @@ const DictionaryName kDictionaries[] = {
     {"DICT_APRILTAG_36h11", cv::aruco::DICT_APRILTAG_36h11},
 };
 
+// The libapriltag families glasspiv prints and detects. Larger ones
+// (tagStandard52h13, tagCircle49h12) need decoding tables of 100 MB and more.
+struct AprilTagFamilyName {
+  const char* name;
+  apriltag_family_t* (*create)();
+  void (*destroy)(apriltag_family_t*);
+};
+
+const AprilTagFamilyName kAprilTagFamilies[] = {
+    {"tag16h5", tag16h5_create, tag16h5_destroy},
+    {"tag25h9", tag25h9_create, tag25h9_destroy},
+    {"tag36h11", tag36h11_create, tag36h11_destroy},
+    {"tagCircle21h7", tagCircle21h7_create, tagCircle21h7_destroy},
+    {"tagStandard41h12", tagStandard41h12_create, tagStandard41h12_destroy},
+};
+
 constexpr int kMaxSquares = kMaxTargetSquares;
 constexpr int kTag36h11Codes = 587;
 
 // Field names as the target YAML spells them (docs/targets.md).
 const char* squares_field(const TargetSpec& s) { return s.kind == TargetKind::aprilgrid ? "tags" : "squares"; }
 const char* size_field(const TargetSpec& s) {
-  return s.kind == TargetKind::aprilgrid ? "tag_size_mm" : "square_size_mm";
+  switch (s.kind) {
+    case TargetKind::aprilgrid: case TargetKind::apriltag: return "tag_size_mm";
+    case TargetKind::aruco_marker: return "marker_size_mm";
+    default: return "square_size_mm";
+  }
+}
+const char* id_field(const TargetSpec& s) {
+  switch (s.kind) {
+    case TargetKind::aruco_marker: return "marker_id";
+    case TargetKind::apriltag: return "tag_id";
+    default: return "first_id";
+  }
+}
+
+// Where a single marker's detected square starts in its pattern, mm.
+double single_marker_inset_mm(const TargetSpec& s) {
+  if (s.kind != TargetKind::apriltag) return 0;
+  const AprilTagFamilyInfo f = apriltag_family_info(s.dictionary);
+  return f.codes == 0 ? 0 : s.marker_size_mm * f.inset_cells / f.border_cells;
 }
 bool legacy_even(const TargetSpec& s) {
   return s.kind == TargetKind::charuco && s.charuco_layout == CharucoLayout::legacy && s.squares_y % 2 == 0;
@@ -60,6 +100,47 @@ int marker_count(const TargetSpec& s) {
   return n;
 }
 
+// A length in mm within [kMinTargetLengthMm, kMaxTargetLengthMm].
+void check_length(double value, const std::string& field, const std::string& file) {
+  if (!std::isfinite(value) || !(value > 0))
+    throw InputError(file, field, fmt::format("must be a positive length in mm, got {}", value));
+  if (value < kMinTargetLengthMm)
+    throw InputError(file, field, fmt::format("{} mm is less than {} mm, the smallest length a target may have", value,
+                                              kMinTargetLengthMm));
+  if (value > kMaxTargetLengthMm)
+    throw InputError(file, field, fmt::format("{} mm is more than {} mm; the unit is mm", value, kMaxTargetLengthMm));
+}
+
+void validate_single_marker(const TargetSpec& s, const std::string& file) {
+  auto fail = [&](const std::string& field, const std::string& problem) { throw InputError(file, field, problem); };
+  const bool aruco = s.kind == TargetKind::aruco_marker;
+  const std::string what = aruco ? "an ArUco marker" : "an AprilTag";
+  if (s.squares_x != 0 || s.squares_y != 0)
+    fail("squares", fmt::format("[{}, {}]: {} is a single marker, it has no squares", s.squares_x, s.squares_y, what));
+  if (s.square_size_mm != 0)
+    fail("square_size_mm", fmt::format("{} has no squares; its size is {}", what, size_field(s)));
+  if (s.charuco_layout != CharucoLayout::opencv) fail("charuco_layout", "applies to charuco boards only");
+  check_length(s.marker_size_mm, size_field(s), file);
+  int size = 0;
+  if (aruco) {
+    size = opencv_dictionary_size(s.dictionary);
+    if (size == 0)
+      fail("dictionary", fmt::format("'{}' is not an OpenCV dictionary (known: {})", s.dictionary,
+                                     opencv_dictionary_names()));
+  } else {
+    size = apriltag_family_info(s.dictionary).codes;
+    if (size == 0)
+      fail("dictionary", fmt::format("'{}' is not an AprilTag family glasspiv knows ({})", s.dictionary,
+                                     apriltag_family_names()));
+  }
+  if (s.first_id < 0 || s.first_id >= size)
+    fail(id_field(s), fmt::format("{} is not an id of {}, which has ids 0 to {}", s.first_id, s.dictionary, size - 1));
+  const Eigen::Vector2d pattern = board_size_mm(s);
+  if (pattern.maxCoeff() > kMaxTargetPatternMm)
+    fail(size_field(s), fmt::format("the marker would print {:.6g} mm across, more than the {} mm a target may have",
+                                    pattern.x(), kMaxTargetPatternMm));
+}
+
 }  // namespace
 
 std::string target_kind_name(TargetKind kind) {
@@ -67,9 +148,13 @@ std::string target_kind_name(TargetKind kind) {
     case TargetKind::chessboard: return "chessboard";
     case TargetKind::charuco: return "charuco";
     case TargetKind::aprilgrid: return "aprilgrid";
+    case TargetKind::aruco_marker: return "aruco_marker";
+    case TargetKind::apriltag: return "apriltag";
   }
   return "?";
 }
+
+bool is_single_marker(TargetKind kind) { return kind == TargetKind::aruco_marker || kind == TargetKind::apriltag; }
 
 std::string charuco_layout_name(CharucoLayout layout) {
   return layout == CharucoLayout::legacy ? "legacy" : "opencv";
@@ -93,9 +178,40 @@ int opencv_dictionary_size(const std::string& name) {
   return cv::aruco::getPredefinedDictionary(id)->bytesList.rows;
 }
 
+AprilTagFamilyPtr create_apriltag_family(const std::string& name) {
+  for (const auto& f : kAprilTagFamilies)
+    if (name == f.name) return AprilTagFamilyPtr(f.create(), AprilTagFamilyDeleter{f.destroy});
+  return AprilTagFamilyPtr();
+}
+
+AprilTagFamilyInfo apriltag_family_info(const std::string& name) {
+  AprilTagFamilyInfo info;
+  if (const AprilTagFamilyPtr family = create_apriltag_family(name)) {
+    info.codes = static_cast<int>(family->ncodes);
+    info.border_cells = family->width_at_border;
+    info.reversed_border = family->reversed_border;
+    // libapriltag's total_width adds a one-bit white ring around a normal
+    // family's black border: that ring is the margin's, not the pattern's.
+    info.pattern_cells = family->reversed_border ? family->total_width : family->width_at_border;
+    info.inset_cells = (info.pattern_cells - info.border_cells) / 2;
+    info.min_hamming = static_cast<int>(family->h);
+  }
+  return info;
+}
+
+std::string apriltag_family_names() {
+  std::string list;
+  for (const auto& f : kAprilTagFamilies) list += (list.empty() ? "" : ", ") + std::string(f.name);
+  return list;
+}
+
 void validate_target(const TargetSpec& s, const std::string& file) {
   auto fail = [&](const std::string& field, const std::string& problem) { throw InputError(file, field, problem); };
   const std::string kind = target_kind_name(s.kind);
+  if (is_single_marker(s.kind)) {
+    validate_single_marker(s, file);
+    return;
+  }
 
   const int min_squares = s.kind == TargetKind::chessboard ? 4 : s.kind == TargetKind::charuco ? 3 : 2;
   for (const int n : {s.squares_x, s.squares_y}) {
@@ -180,6 +296,8 @@ void validate_target(const TargetSpec& s, const std::string& file) {
       pattern();
       return;
     }
+    case TargetKind::aruco_marker:
+    case TargetKind::apriltag: return;  // validated above
   }
 }
 
@@ -190,6 +308,12 @@ bool square_is_black(const TargetSpec& s, int col, int row) {
 
 std::vector<BoardCorner> board_corners(const TargetSpec& s) {
   std::vector<BoardCorner> corners;
+  if (is_single_marker(s.kind)) {
+    const double o = single_marker_inset_mm(s), m = s.marker_size_mm;
+    const double dx[4] = {0, m, m, 0}, dy[4] = {0, 0, m, m};
+    for (int k = 0; k < 4; ++k) corners.push_back({k, Eigen::Vector3d(o + dx[k], o + dy[k], 0)});
+    return corners;
+  }
   if (s.kind == TargetKind::aprilgrid) {
     const double t = s.square_size_mm, pitch = s.square_size_mm + s.marker_size_mm;
     const double dx[4] = {0, t, t, 0}, dy[4] = {0, 0, t, t};
@@ -209,13 +333,14 @@ std::vector<BoardCorner> board_corners(const TargetSpec& s) {
 }
 
 std::size_t board_corner_count(const TargetSpec& s) {
+  if (is_single_marker(s.kind)) return 4;
   if (s.kind == TargetKind::aprilgrid) return 4 * static_cast<std::size_t>(s.squares_x) * s.squares_y;
   if (s.squares_x < 2 || s.squares_y < 2) return 0;
   return static_cast<std::size_t>(s.squares_x - 1) * (s.squares_y - 1);
 }
 
 bool corner_grid(const TargetSpec& s, int& width, int& height, double& spacing_mm) {
-  if (s.kind == TargetKind::aprilgrid) return false;
+  if (s.kind == TargetKind::aprilgrid || is_single_marker(s.kind)) return false;
   width = s.squares_x - 1;
   height = s.squares_y - 1;
   spacing_mm = s.square_size_mm;
@@ -223,6 +348,10 @@ bool corner_grid(const TargetSpec& s, int& width, int& height, double& spacing_m
 }
 
 Eigen::Vector2d board_size_mm(const TargetSpec& s) {
+  if (is_single_marker(s.kind)) {
+    const double side = s.marker_size_mm + 2 * single_marker_inset_mm(s);
+    return Eigen::Vector2d(side, side);
+  }
   if (s.kind == TargetKind::aprilgrid)
     return Eigen::Vector2d(s.squares_x * s.square_size_mm + (s.squares_x - 1) * s.marker_size_mm,
                            s.squares_y * s.square_size_mm + (s.squares_y - 1) * s.marker_size_mm);
@@ -232,6 +361,14 @@ Eigen::Vector2d board_size_mm(const TargetSpec& s) {
 std::vector<BoardMarker> board_markers(const TargetSpec& s) {
   std::vector<BoardMarker> markers;
   if (s.kind == TargetKind::chessboard) return markers;
+  if (is_single_marker(s.kind)) {
+    BoardMarker m;
+    m.id = s.first_id;
+    m.top_left_mm = Eigen::Vector2d::Constant(single_marker_inset_mm(s));
+    m.size_mm = s.marker_size_mm;
+    markers.push_back(m);
+    return markers;
+  }
   int id = s.first_id;
   for (int r = 0; r < s.squares_y; ++r)
     for (int c = 0; c < s.squares_x; ++c) {
@@ -267,6 +404,11 @@ std::string describe_target(const TargetSpec& s) {
     case TargetKind::aprilgrid:
       return fmt::format("{}aprilgrid, {} x {} {} tags of {} mm, {} mm apart, first id {}", named, s.squares_x,
                          s.squares_y, s.dictionary, s.square_size_mm, s.marker_size_mm, s.first_id);
+    case TargetKind::aruco_marker:
+      return fmt::format("{}aruco_marker, {} id {}, {} mm (its black border)", named, s.dictionary, s.first_id,
+                         s.marker_size_mm);
+    case TargetKind::apriltag:
+      return fmt::format("{}apriltag, {} id {}, tag size {} mm", named, s.dictionary, s.first_id, s.marker_size_mm);
   }
   return named;
 }

@@ -26,12 +26,18 @@ const std::vector<std::string> kChessboardKeys = {"squares", "square_size_mm"};
 const std::vector<std::string> kCharucoKeys = {"squares",    "square_size_mm", "marker_size_mm",
                                                "dictionary", "first_id",       "charuco_layout"};
 const std::vector<std::string> kAprilgridKeys = {"tags", "tag_size_mm", "tag_spacing_mm", "dictionary", "first_id"};
+const std::vector<std::string> kArucoMarkerKeys = {"dictionary", "marker_id", "marker_size_mm"};
+const std::vector<std::string> kAprilTagKeys = {"dictionary", "tag_id", "tag_size_mm"};
+const TargetKind kKinds[] = {TargetKind::chessboard, TargetKind::charuco, TargetKind::aprilgrid,
+                             TargetKind::aruco_marker, TargetKind::apriltag};
 
 const std::vector<std::string>& kind_keys(TargetKind kind) {
   switch (kind) {
     case TargetKind::chessboard: return kChessboardKeys;
     case TargetKind::charuco: return kCharucoKeys;
     case TargetKind::aprilgrid: return kAprilgridKeys;
+    case TargetKind::aruco_marker: return kArucoMarkerKeys;
+    case TargetKind::apriltag: return kAprilTagKeys;
   }
   return kCharucoKeys;
 }
@@ -64,6 +70,13 @@ class Reader : public YamlFields {
     return {whole(node[0], field + "[0]", 1), whole(node[1], field + "[1]", 1)};
   }
 };
+
+// The comment line may not break: a name with a newline would end it.
+std::string one_line(std::string text) {
+  for (char& c : text)
+    if (c == '\n' || c == '\r') c = ' ';
+  return text;
+}
 
 std::string default_name(const std::string& path) {
   if (path.empty()) return "";
@@ -104,15 +117,18 @@ TargetSpec parse_target_yaml(std::string_view contents, const std::string& path)
   TargetSpec spec;
   const YAML::Node kind_node = required("kind");
   const std::string kind = r.text(kind_node, "kind");
-  if (kind == "chessboard") spec.kind = TargetKind::chessboard;
-  else if (kind == "charuco") spec.kind = TargetKind::charuco;
-  else if (kind == "aprilgrid") spec.kind = TargetKind::aprilgrid;
-  else r.fail("kind", kind_node, "'" + kind + "' is not a target kind (chessboard, charuco, aprilgrid)");
+  bool known = false;
+  std::string kinds;
+  for (const TargetKind k : kKinds) {
+    kinds += (kinds.empty() ? "" : ", ") + target_kind_name(k);
+    if (kind == target_kind_name(k)) spec.kind = k, known = true;
+  }
+  if (!known) r.fail("kind", kind_node, "'" + kind + "' is not a target kind (" + kinds + ")");
 
   const std::vector<std::string>& keys = kind_keys(spec.kind);
   for (const auto& [key, key_node] : order) {
     if (contains(kCommonKeys, key) || contains(keys, key)) continue;
-    for (const TargetKind other : {TargetKind::chessboard, TargetKind::charuco, TargetKind::aprilgrid})
+    for (const TargetKind other : kKinds)
       if (contains(kind_keys(other), key))
         r.fail(key, key_node,
                fmt::format("{} targets do not use it (they have {}, {})", kind, join(kCommonKeys), join(keys)));
@@ -121,7 +137,13 @@ TargetSpec parse_target_yaml(std::string_view contents, const std::string& path)
 
   spec.name = optional("name") ? r.text(*optional("name"), "name") : default_name(path);
 
-  if (spec.kind == TargetKind::aprilgrid) {
+  if (spec.kind == TargetKind::aruco_marker || spec.kind == TargetKind::apriltag) {
+    const bool aruco = spec.kind == TargetKind::aruco_marker;
+    const std::string id = aruco ? "marker_id" : "tag_id", size = aruco ? "marker_size_mm" : "tag_size_mm";
+    spec.dictionary = r.text(required("dictionary"), "dictionary");
+    spec.first_id = r.whole(required(id), id, 0);
+    spec.marker_size_mm = r.length(required(size), size);
+  } else if (spec.kind == TargetKind::aprilgrid) {
     std::tie(spec.squares_x, spec.squares_y) = r.pair(required("tags"), "tags", "tags");
     spec.square_size_mm = r.length(required("tag_size_mm"), "tag_size_mm");
     spec.marker_size_mm = r.length(required("tag_spacing_mm"), "tag_spacing_mm");
@@ -155,6 +177,15 @@ std::string format_target_yaml(const TargetSpec& spec) {
   out << YAML::Key << "glasspiv_target" << YAML::Value << kVersion;
   if (!spec.name.empty()) out << YAML::Key << "name" << YAML::Value << spec.name;
   out << YAML::Key << "kind" << YAML::Value << target_kind_name(spec.kind);
+  if (is_single_marker(spec.kind)) {
+    const bool aruco = spec.kind == TargetKind::aruco_marker;
+    out << YAML::Key << "dictionary" << YAML::Value << spec.dictionary;
+    out << YAML::Key << (aruco ? "marker_id" : "tag_id") << YAML::Value << spec.first_id;
+    out << YAML::Key << (aruco ? "marker_size_mm" : "tag_size_mm") << YAML::Value
+        << format_number(spec.marker_size_mm);
+    out << YAML::EndMap;
+    return "# glasspiv target (docs/targets.md): " + one_line(describe_target(spec)) + "\n" + out.c_str() + "\n";
+  }
   const bool grid = spec.kind == TargetKind::aprilgrid;
   out << YAML::Key << (grid ? "tags" : "squares") << YAML::Value << YAML::Flow << YAML::BeginSeq << spec.squares_x
       << spec.squares_y << YAML::EndSeq;
@@ -169,10 +200,8 @@ std::string format_target_yaml(const TargetSpec& spec) {
   if (spec.kind == TargetKind::charuco)
     out << YAML::Key << "charuco_layout" << YAML::Value << charuco_layout_name(spec.charuco_layout);
   out << YAML::EndMap;
-  std::string summary = describe_target(spec);
-  for (char& c : summary)
-    if (c == '\n' || c == '\r') c = ' ';
-  return "# glasspiv calibration target (docs/targets.md): " + summary + "\n" + out.c_str() + "\n";
+  return "# glasspiv calibration target (docs/targets.md): " + one_line(describe_target(spec)) + "\n" + out.c_str() +
+         "\n";
 }
 
 void write_target_yaml(const std::string& path, const TargetSpec& spec) {

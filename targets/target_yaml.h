@@ -2,7 +2,7 @@
 // The target spec file (YAML, docs/targets.md):
 //
 //   glasspiv_target: 1
-//   kind: charuco            # chessboard | charuco | aprilgrid
+//   kind: charuco            # chessboard | charuco | aprilgrid | aruco_marker | apriltag
 //   squares: [11, 8]         # across, down (aprilgrid: tags: [6, 6])
 //   square_size_mm: 15       # aprilgrid: tag_size_mm
 //   marker_size_mm: 11       # charuco only; aprilgrid: tag_spacing_mm (the gap)
@@ -10,6 +10,14 @@
 //   first_id: 0              # optional, default 0
 //   charuco_layout: opencv   # optional, default opencv; or legacy
 //   name: lab board A        # optional, default the file's stem
+//
+// A single fiducial marker:
+//
+//   glasspiv_target: 1
+//   kind: aruco_marker       # or apriltag
+//   dictionary: DICT_4X4_50  # apriltag: a libapriltag family, tag36h11 ...
+//   marker_id: 7             # apriltag: tag_id
+//   marker_size_mm: 40       # apriltag: tag_size_mm
 //
 // Readers reject unknown keys, keys of another kind, wrong types and invalid
 // values with InputError(file, field, problem).

@@ -7,11 +7,17 @@
 #include <string>
 
 #include <apriltag/apriltag.h>
+#include <apriltag/tag16h5.h>
+#include <apriltag/tag25h9.h>
 #include <apriltag/tag36h11.h>
+#include <apriltag/tagCircle21h7.h>
+#include <apriltag/tagStandard41h12.h>
+#include <opencv2/aruco.hpp>
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "targets/target_image.h"
+#include "targets/target_yaml.h"
 #include "util/atomic_file.h"
 #include "util/input_error.h"
 
@@ -211,6 +217,127 @@ TEST(AprilTag, LibapriltagReadsOpenCvTag36h11WithTheSameIds) {
   }
   apriltag_detector_destroy(detector);
   tag36h11_destroy(family);
+}
+
+TargetSpec single(TargetKind kind, const std::string& dictionary, int id, double size_mm) {
+  TargetSpec s;
+  s.kind = kind;
+  s.dictionary = dictionary;
+  s.first_id = id;
+  s.marker_size_mm = size_mm;
+  return s;
+}
+
+TEST(SingleMarker, ArucoIsOpenCvsMarkerBitForBit) {
+  // 6 x 6 cells of 5 mm at 2 px/mm: each cell 10 x 10 whole pixels, so the
+  // raster must equal OpenCV's drawMarker at 60 px exactly; the default margin
+  // is two cells of white.
+  for (const int id : {0, 17, 49}) {
+    const TargetSpec s = single(TargetKind::aruco_marker, "DICT_4X4_50", id, 30);
+    EXPECT_DOUBLE_EQ(default_margin_mm(s), 10);
+    const TargetRender r = render_target(s, 2, 0);
+    cv::Mat drawn;
+    cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_50)->drawMarker(id, 60, drawn, 1);
+    ASSERT_EQ(r.image.size(), drawn.size());
+    EXPECT_EQ(cv::norm(r.image, drawn, cv::NORM_INF), 0) << "id " << id;
+    // OpenCV reads it back with its id.
+    const TargetRender framed = render_target(s, 4, default_margin_mm(s));
+    std::vector<std::vector<cv::Point2f>> corners;
+    std::vector<int> ids;
+    cv::aruco::detectMarkers(framed.image, cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_50), corners, ids);
+    ASSERT_EQ(ids, std::vector<int>{id});
+  }
+}
+
+// libapriltag reads each family's tag as glasspiv draws it with the id drawn, no
+// corrected bit, and its corners at board_corners() (libapriltag's
+// corner-of-pixel convention: +0.5 px; 0.25 px only checks which corner is which).
+TEST(SingleMarker, LibapriltagReadsEveryFamilyAsDrawn) {
+  struct Family {
+    const char* name;
+    apriltag_family_t* (*create)();
+    void (*destroy)(apriltag_family_t*);
+    std::vector<int> ids;
+  };
+  const Family families[] = {{"tag16h5", tag16h5_create, tag16h5_destroy, {0, 29}},
+                             {"tag25h9", tag25h9_create, tag25h9_destroy, {0, 34}},
+                             {"tag36h11", tag36h11_create, tag36h11_destroy, {0, 300, 586}},
+                             {"tagCircle21h7", tagCircle21h7_create, tagCircle21h7_destroy, {0, 37}},
+                             {"tagStandard41h12", tagStandard41h12_create, tagStandard41h12_destroy, {0, 1000, 2114}}};
+  for (const Family& f : families) {
+    apriltag_family_t* family = f.create();
+    apriltag_detector_t* detector = apriltag_detector_create();
+    apriltag_detector_add_family_bits(detector, family, 0);
+    detector->quad_decimate = 1;
+    for (const int id : f.ids) {
+      const TargetSpec s = single(TargetKind::apriltag, f.name, id, 40);
+      const double cell = 40.0 / family->width_at_border;
+      EXPECT_DOUBLE_EQ(default_margin_mm(s), 2 * cell);
+      TargetRender r = render_target(s, 10 / cell, default_margin_mm(s));  // 10 px per bit
+      image_u8_t image{r.image.cols, r.image.rows, static_cast<int32_t>(r.image.step[0]), r.image.data};
+      zarray_t* detections = apriltag_detector_detect(detector, &image);
+      ASSERT_EQ(zarray_size(detections), 1) << f.name << " id " << id;
+      apriltag_detection_t* d = nullptr;
+      zarray_get(detections, 0, &d);
+      EXPECT_EQ(d->id, id) << f.name;
+      EXPECT_EQ(d->hamming, 0);
+      // libapriltag's own tags, upright: p[0..3] = bottom-left, bottom-right,
+      // top-right, top-left (marker_detect.cpp's kAprilTagCorner).
+      const std::vector<BoardCorner> corners = board_corners(s);
+      const int ours_of_p[4] = {3, 2, 1, 0};
+      for (int k = 0; k < 4; ++k) {
+        const Eigen::Vector2d expected = r.pixel_from_board(corners[static_cast<std::size_t>(ours_of_p[k])].point_mm.head<2>()) +
+                                         Eigen::Vector2d(0.5, 0.5);
+        EXPECT_LT((Eigen::Vector2d(d->p[k][0], d->p[k][1]) - expected).norm(), 0.25) << f.name << " p" << k;
+      }
+      apriltag_detections_destroy(detections);
+    }
+    apriltag_detector_destroy(detector);
+    f.destroy(family);
+  }
+}
+
+TEST(SingleMarker, OpenCvTag36h11IsLibapriltagsTurnedBy180Degrees) {
+  // Why an aprilgrid's tag and a single apriltag of the same id have their
+  // corner 0 at opposite corners: OpenCV's DICT_APRILTAG_36h11 draws the codes
+  // turned by 180 degrees from libapriltag's own pictures.
+  for (const int id : {0, 5, 586}) {
+    const TargetRender own = render_target(single(TargetKind::apriltag, "tag36h11", id, 40), 1, 0);
+    const TargetRender opencv = render_target(single(TargetKind::aruco_marker, "DICT_APRILTAG_36h11", id, 40), 1, 0);
+    cv::Mat turned;
+    cv::rotate(opencv.image, turned, cv::ROTATE_180);
+    // 8 bits of 40 mm at 1 px/mm: whole 5 px cells.
+    EXPECT_EQ(cv::norm(own.image, turned, cv::NORM_INF), 0) << "id " << id;
+    EXPECT_GT(cv::norm(own.image, opencv.image, cv::NORM_INF), 0) << "id " << id;
+  }
+}
+
+TEST(SingleMarker, SvgAndCaption) {
+  const TargetSpec m = single(TargetKind::aruco_marker, "DICT_4X4_50", 7, 30);
+  const std::string svg = target_svg(m);
+  for (const char* text : {"ArUco marker DICT_4X4_50 id 7, marker 30 mm (its black border)",
+                           "print at 100% scale; check: this bar is 100 mm"})
+    EXPECT_NE(svg.find(text), std::string::npos) << text;
+  // The top-left cell of the border at the 10 mm margin: a row of 6 black cells.
+  EXPECT_NE(svg.find("<rect x=\"10\" y=\"10\" width=\"30\" height=\"5\"/>"), std::string::npos);
+  const TargetSpec t = single(TargetKind::apriltag, "tagStandard41h12", 12, 25);
+  const std::string tag = target_svg(t);
+  EXPECT_NE(tag.find("AprilTag tagStandard41h12 id 12, tag size 25 mm (inside the black ring: the detected square, "
+                     "5 bits)"),
+            std::string::npos);
+  // The 9-bit pattern with its 2-bit margin: 45 + 2 * 10 mm across.
+  EXPECT_DOUBLE_EQ(default_margin_mm(t), 10);
+  EXPECT_EQ(board_size_mm(t), Eigen::Vector2d(45, 45));
+  // Every black rectangle lies on the pattern, none overlap its neighbours' rows.
+  for (const TargetSpec& s : {m, t}) {
+    const Eigen::Vector2d size = board_size_mm(s);
+    for (const BoardRect& r : target_black_rects(s)) {
+      EXPECT_GE(r.x0, 0);
+      EXPECT_GE(r.y0, 0);
+      EXPECT_LE(r.x1, size.x() + 1e-9);
+      EXPECT_LE(r.y1, size.y() + 1e-9);
+    }
+  }
 }
 
 }  // namespace

@@ -46,6 +46,24 @@ TargetSpec aprilgrid() {
   return s;
 }
 
+TargetSpec aruco_marker() {
+  TargetSpec s;
+  s.kind = TargetKind::aruco_marker;
+  s.dictionary = "DICT_4X4_50";
+  s.first_id = 7;
+  s.marker_size_mm = 30;
+  return s;
+}
+
+TargetSpec apriltag(const std::string& family = "tag36h11") {
+  TargetSpec s;
+  s.kind = TargetKind::apriltag;
+  s.dictionary = family;
+  s.first_id = 3;
+  s.marker_size_mm = 40;
+  return s;
+}
+
 // Expects `f` to throw InputError for `field`; returns its message.
 template <typename F>
 std::string expect_input_error(F f, const std::string& field, const std::string& file = "") {
@@ -176,6 +194,111 @@ TEST(BoardCorners, AprilgridFourPerTag) {
   EXPECT_EQ(markers[20].row, 3);
 }
 
+TEST(BoardCorners, SingleMarkerFourCornersOfItsBorder) {
+  // TL, TR, BR, BL of the black border, the origin at its top-left.
+  for (const TargetSpec& s : {aruco_marker(), apriltag("tag36h11"), apriltag("tag16h5"), apriltag("tag25h9")}) {
+    SCOPED_TRACE(s.dictionary);
+    const double m = s.marker_size_mm;
+    const auto corners = board_corners(s);
+    ASSERT_EQ(corners.size(), 4u);
+    EXPECT_EQ(board_corner_count(s), 4u);
+    const Eigen::Vector3d expected[4] = {{0, 0, 0}, {m, 0, 0}, {m, m, 0}, {0, m, 0}};
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_EQ(corners[static_cast<std::size_t>(k)].id, k);
+      EXPECT_EQ(corners[static_cast<std::size_t>(k)].point_mm, expected[k]);
+    }
+    EXPECT_EQ(board_size_mm(s), Eigen::Vector2d(m, m));
+    int w = 0, h = 0;
+    double spacing = 0;
+    EXPECT_FALSE(corner_grid(s, w, h, spacing));
+    const auto markers = board_markers(s);
+    ASSERT_EQ(markers.size(), 1u);
+    EXPECT_EQ(markers[0].id, s.first_id);
+    EXPECT_EQ(markers[0].top_left_mm, Eigen::Vector2d(0, 0));
+    EXPECT_EQ(markers[0].size_mm, m);
+  }
+}
+
+TEST(BoardCorners, ReversedBorderTagsPrintTheirOuterBits) {
+  // tagStandard41h12, tagCircle21h7: the detected square (5 bits) sits 2 bits
+  // in from the 9-bit pattern's edge; the outer ring holds data bits.
+  for (const std::string family : {"tagStandard41h12", "tagCircle21h7"}) {
+    SCOPED_TRACE(family);
+    const AprilTagFamilyInfo f = apriltag_family_info(family);
+    EXPECT_TRUE(f.reversed_border);
+    EXPECT_EQ(f.border_cells, 5);
+    EXPECT_EQ(f.pattern_cells, 9);
+    EXPECT_EQ(f.inset_cells, 2);
+    const TargetSpec s = apriltag(family);  // 40 mm: 8 mm bits
+    EXPECT_EQ(board_size_mm(s), Eigen::Vector2d(72, 72));
+    const auto corners = board_corners(s);
+    EXPECT_EQ(corners[0].point_mm, Eigen::Vector3d(16, 16, 0));
+    EXPECT_EQ(corners[2].point_mm, Eigen::Vector3d(56, 56, 0));
+    EXPECT_EQ(board_markers(s)[0].top_left_mm, Eigen::Vector2d(16, 16));
+  }
+  const AprilTagFamilyInfo t = apriltag_family_info("tag36h11");
+  EXPECT_EQ(t.codes, 587);
+  EXPECT_EQ(t.border_cells, 8);
+  EXPECT_EQ(t.pattern_cells, 8);
+  EXPECT_EQ(t.min_hamming, 11);
+  EXPECT_EQ(apriltag_family_info("tag16h5").codes, 30);
+  EXPECT_EQ(apriltag_family_info("tag25h9").codes, 35);
+  EXPECT_EQ(apriltag_family_info("tagCircle21h7").codes, 38);
+  EXPECT_EQ(apriltag_family_info("tagStandard41h12").codes, 2115);
+  EXPECT_EQ(apriltag_family_info("tag99h1").codes, 0);
+  EXPECT_EQ(apriltag_family_names(), "tag16h5, tag25h9, tag36h11, tagCircle21h7, tagStandard41h12");
+}
+
+TEST(Validate, SingleMarkers) {
+  EXPECT_NO_THROW(validate_target(aruco_marker()));
+  EXPECT_NO_THROW(validate_target(apriltag()));
+  TargetSpec s = aruco_marker();
+  s.first_id = 50;  // DICT_4X4_50: ids 0 to 49
+  EXPECT_NE(expect_input_error([&] { validate_target(s, "m.yaml"); }, "marker_id", "m.yaml").find("0 to 49"),
+            std::string::npos);
+  s.first_id = -1;
+  expect_input_error([&] { validate_target(s); }, "marker_id");
+  s.first_id = 49;
+  EXPECT_NO_THROW(validate_target(s));
+  s = aruco_marker();
+  s.dictionary = "tag36h11";  // a libapriltag family is no OpenCV dictionary
+  expect_input_error([&] { validate_target(s); }, "dictionary");
+  s = aruco_marker();
+  s.dictionary = "DICT_APRILTAG_36h11";  // OpenCV's own AprilTag dictionaries are
+  s.first_id = 586;
+  EXPECT_NO_THROW(validate_target(s));
+  s = aruco_marker();
+  s.marker_size_mm = 0;
+  expect_input_error([&] { validate_target(s); }, "marker_size_mm");
+  s.marker_size_mm = 1e300;
+  expect_input_error([&] { validate_target(s); }, "marker_size_mm");
+  // Fields a single marker does not use.
+  s = aruco_marker();
+  s.squares_x = 1;
+  expect_input_error([&] { validate_target(s); }, "squares");
+  s = aruco_marker();
+  s.square_size_mm = 30;
+  expect_input_error([&] { validate_target(s); }, "square_size_mm");
+  s = apriltag();
+  s.charuco_layout = CharucoLayout::legacy;
+  expect_input_error([&] { validate_target(s); }, "charuco_layout");
+
+  s = apriltag();
+  s.first_id = 587;
+  expect_input_error([&] { validate_target(s); }, "tag_id");
+  s = apriltag("tag16h5");
+  s.first_id = 30;
+  expect_input_error([&] { validate_target(s); }, "tag_id");
+  s = apriltag("DICT_APRILTAG_36h11");  // OpenCV's name: an aruco_marker
+  EXPECT_NE(expect_input_error([&] { validate_target(s); }, "dictionary").find("tag36h11"), std::string::npos);
+  s = apriltag();
+  s.marker_size_mm = std::nan("");
+  expect_input_error([&] { validate_target(s); }, "tag_size_mm");
+  s = apriltag("tagStandard41h12");
+  s.marker_size_mm = 6000;  // prints 10800 mm with its outer bits
+  expect_input_error([&] { validate_target(s); }, "tag_size_mm");
+}
+
 TEST(Validate, RejectsWithTheFieldNamed) {
   TargetSpec s = chessboard();
   s.squares_x = 3;
@@ -280,6 +403,8 @@ TEST(Describe, OneLine) {
   EXPECT_EQ(describe_target(charuco(11, 8)),
             "charuco, 11 x 8 squares of 15 mm, markers 11 mm, DICT_5X5_100, first id 0, opencv layout");
   EXPECT_EQ(describe_target(chessboard()), "chessboard, 9 x 6 squares of 25 mm (8 x 5 inner corners)");
+  EXPECT_EQ(describe_target(aruco_marker()), "aruco_marker, DICT_4X4_50 id 7, 30 mm (its black border)");
+  EXPECT_EQ(describe_target(apriltag()), "apriltag, tag36h11 id 3, tag size 40 mm");
 }
 
 // ------------------------------------------------------------ YAML
@@ -323,6 +448,39 @@ TEST(TargetYaml, RoundTripIsExactForAwkwardNumbers) {
   EXPECT_EQ(back.marker_size_mm, s.marker_size_mm);
   EXPECT_EQ(back.first_id, 3);
   EXPECT_EQ(back.charuco_layout, CharucoLayout::legacy);
+}
+
+TEST(TargetYaml, SingleMarkersRoundTrip) {
+  TargetSpec m = aruco_marker();
+  m.name = "frame fiducial, left";
+  m.marker_size_mm = 1.0 / 3;
+  TargetSpec t = apriltag("tagStandard41h12");
+  t.first_id = 2114;
+  t.marker_size_mm = 0.1 + 0.2;
+  for (const TargetSpec& s : {m, t, apriltag("tag16h5"), aruco_marker()}) {
+    SCOPED_TRACE(describe_target(s));
+    const std::string yaml = format_target_yaml(s);
+    const TargetSpec back = parse_target_yaml(yaml, "again.yaml");
+    EXPECT_EQ(back.kind, s.kind);
+    EXPECT_EQ(back.name, s.name.empty() ? "again" : s.name);
+    EXPECT_EQ(back.marker_size_mm, s.marker_size_mm);  // exact
+    EXPECT_EQ(back.dictionary, s.dictionary);
+    EXPECT_EQ(back.first_id, s.first_id);
+    EXPECT_EQ(back.squares_x, 0);
+    EXPECT_EQ(back.square_size_mm, 0);
+    EXPECT_EQ(format_target_yaml(back.name == s.name ? back : s), yaml);
+  }
+  const TargetSpec a = parse_target_yaml(
+      "glasspiv_target: 1\nkind: aruco_marker\ndictionary: DICT_4X4_50\nmarker_id: 7\nmarker_size_mm: 30\n", "m.yaml");
+  EXPECT_EQ(a.kind, TargetKind::aruco_marker);
+  EXPECT_EQ(a.first_id, 7);
+  EXPECT_EQ(a.marker_size_mm, 30);
+  const TargetSpec b = parse_target_yaml(
+      "glasspiv_target: 1\nkind: apriltag\ndictionary: tag25h9\ntag_id: 4\ntag_size_mm: 22.5\n", "t.yaml");
+  EXPECT_EQ(b.kind, TargetKind::apriltag);
+  EXPECT_EQ(b.dictionary, "tag25h9");
+  EXPECT_EQ(b.first_id, 4);
+  EXPECT_EQ(b.marker_size_mm, 22.5);
 }
 
 const char* const kGood =
@@ -405,6 +563,48 @@ TEST(TargetYaml, RejectsEveryKindOfMistake) {
   expect_input_error([] { parse_target_yaml("kind: [charuco", "spec.yaml"); }, "", "spec.yaml");
   expect_input_error([] { parse_target_yaml("- 1\n- 2\n", "spec.yaml"); }, "", "spec.yaml");
   expect_input_error([] { read_target_yaml("no/such/spec.yaml"); }, "", "no/such/spec.yaml");
+}
+
+TEST(TargetYaml, SingleMarkerRejections) {
+  const std::string aruco = "glasspiv_target: 1\nkind: aruco_marker\ndictionary: DICT_4X4_50\nmarker_id: 7\n";
+  const std::string tag = "glasspiv_target: 1\nkind: apriltag\ndictionary: tag36h11\ntag_id: 3\n";
+  const Rejection cases[] = {
+      {"aruco without size", aruco, "marker_size_mm", "missing"},
+      {"aruco without id", "glasspiv_target: 1\nkind: aruco_marker\ndictionary: DICT_4X4_50\nmarker_size_mm: 30\n",
+       "marker_id", "missing"},
+      {"aruco without dictionary", "glasspiv_target: 1\nkind: aruco_marker\nmarker_id: 1\nmarker_size_mm: 30\n",
+       "dictionary", "missing"},
+      {"aruco with a tag size", aruco + "tag_size_mm: 30\n", "tag_size_mm", "aruco_marker targets do not use it"},
+      {"aruco with squares", aruco + "marker_size_mm: 30\nsquares: [1, 1]\n", "squares", "do not use it"},
+      {"aruco with first_id", aruco + "marker_size_mm: 30\nfirst_id: 7\n", "first_id", "do not use it"},
+      {"aruco id beyond", "glasspiv_target: 1\nkind: aruco_marker\ndictionary: DICT_4X4_50\nmarker_id: 50\n"
+                          "marker_size_mm: 30\n",
+       "marker_id", "0 to 49"},
+      {"aruco negative id", "glasspiv_target: 1\nkind: aruco_marker\ndictionary: DICT_4X4_50\nmarker_id: -2\n"
+                            "marker_size_mm: 30\n",
+       "marker_id", "0 or more"},
+      {"aruco of a tag family", "glasspiv_target: 1\nkind: aruco_marker\ndictionary: tag36h11\nmarker_id: 2\n"
+                                "marker_size_mm: 30\n",
+       "dictionary", "not an OpenCV dictionary"},
+      {"aruco size text", aruco + "marker_size_mm: 3cm\n", "marker_size_mm", "number"},
+      {"tag without size", tag, "tag_size_mm", "missing"},
+      {"tag with marker size", tag + "marker_size_mm: 30\n", "marker_size_mm", "apriltag targets do not use it"},
+      {"tag with spacing", tag + "tag_size_mm: 30\ntag_spacing_mm: 3\n", "tag_spacing_mm", "do not use it"},
+      {"tag id beyond", "glasspiv_target: 1\nkind: apriltag\ndictionary: tag16h5\ntag_id: 30\ntag_size_mm: 30\n",
+       "tag_id", "0 to 29"},
+      {"tag family unknown",
+       "glasspiv_target: 1\nkind: apriltag\ndictionary: tag36h12\ntag_id: 0\ntag_size_mm: 30\n", "dictionary",
+       "not an AprilTag family"},
+      {"tag id not whole", "glasspiv_target: 1\nkind: apriltag\ndictionary: tag36h11\ntag_id: 1.5\ntag_size_mm: 30\n",
+       "tag_id", "whole number"},
+      {"tag size zero", tag + "tag_size_mm: 0\n", "tag_size_mm", "positive"},
+  };
+  for (const Rejection& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string message =
+        expect_input_error([&] { parse_target_yaml(c.yaml, "spec.yaml"); }, c.field, "spec.yaml");
+    EXPECT_NE(message.find(c.says), std::string::npos) << message;
+  }
 }
 
 }  // namespace
