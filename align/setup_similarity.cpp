@@ -69,7 +69,8 @@ cv::Mat valid_mask_of(cv::Size size, const cv::Mat& mask8u, int support_px) {
       throw std::invalid_argument("mask must be CV_8UC1 of the images' size");
     valid = mask8u != 0;
     if (support_px > 0)  // the default border value keeps the image edge from eroding
-      cv::erode(valid, valid, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * support_px + 1, 2 * support_px + 1)));
+      cv::erode(valid, valid,
+                cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * support_px + 1, 2 * support_px + 1)));
   }
   valid.row(0).setTo(0);
   valid.row(size.height - 1).setTo(0);
@@ -80,6 +81,27 @@ cv::Mat valid_mask_of(cv::Size size, const cv::Mat& mask8u, int support_px) {
 
 // Sums over the valid runs for both NCCs: of the intensities r (against the
 // photo's p) and of the gradient magnitudes g (against the photo's q).
+// Non-finite pixels (a float photo may hold NaN) become 0 in `image` and
+// ignored in the returned mask, so the shrinking keeps them out of every
+// compared pixel's filter support. The mask is returned unchanged when all are finite.
+cv::Mat drop_non_finite(cv::Mat& image, const cv::Mat& mask8u) {
+  cv::Mat mask = mask8u;
+  for (int y = 0; y < image.rows; ++y) {
+    float* row = image.ptr<float>(y);
+    for (int x = 0; x < image.cols; ++x) {
+      if (std::isfinite(row[x])) continue;
+      if (mask.data == mask8u.data) {
+        if (!mask8u.empty() && (mask8u.type() != CV_8UC1 || mask8u.size() != image.size()))
+          throw std::invalid_argument("mask must be CV_8UC1 of the images' size");
+        mask = mask8u.empty() ? cv::Mat(image.size(), CV_8U, cv::Scalar(255)) : mask8u.clone();
+      }
+      row[x] = 0;
+      mask.at<std::uint8_t>(y, x) = 0;
+    }
+  }
+  return mask;
+}
+
 struct Sums {
   double r = 0, rr = 0, rp = 0, g = 0, gg = 0, gq = 0;
 };
@@ -312,11 +334,13 @@ void SimilarityOptions::check() const {
 std::vector<EdgePoint> detect_edges(const cv::Mat& image32f, const SimilarityOptions& options, const cv::Mat& mask8u) {
   options.check();
   check_image(image32f, "image");
-  const cv::Mat valid = valid_mask_of(image32f.size(), mask8u, SimilarityDetail::support_px(options));
+  cv::Mat image = image32f.clone();
+  const cv::Mat valid =
+      valid_mask_of(image.size(), drop_non_finite(image, mask8u), SimilarityDetail::support_px(options));
   long count = 0;
   const auto runs = SimilarityDetail::runs_of(valid, &count);
   SimilarityWorkspace ws;
-  blur_into(image32f, options.edge_blur_px, ws.blurred);
+  blur_into(image, options.edge_blur_px, ws.blurred);
   gradient_magnitude_into(ws.blurred, ws.gradient);
   return edges_of(ws.blurred, ws.gradient, runs, thresholds_of(runs, ws.gradient, options), ws.flags);
 }
@@ -392,7 +416,7 @@ PhotoEdgeModel::PhotoEdgeModel(const cv::Mat& photo32f, const SimilarityOptions&
   check_image(photo32f, "photo");
   size_ = photo32f.size();
   photo_ = photo32f.clone();  // the caller may reuse its buffer
-  valid_ = valid_mask_of(size_, mask8u, SimilarityDetail::support_px(options_));
+  valid_ = valid_mask_of(size_, drop_non_finite(photo_, mask8u), SimilarityDetail::support_px(options_));
   runs_ = SimilarityDetail::runs_of(valid_, &valid_pixels_);
   SimilarityWorkspace ws;
   blur_into(photo_, options_.edge_blur_px, ws.blurred);

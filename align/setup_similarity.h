@@ -5,7 +5,8 @@
 // figure a user reads, in px). Marker-corner distances are computed elsewhere.
 // No I/O.
 //
-// Both images are CV_32FC1 of one size, values typically in [0, 1]; pixel
+// Both images are CV_32FC1 of one size, values typically in [0, 1] (non-finite
+// photo pixels are ignored like masked ones; a render must be finite); pixel
 // (0, 0) is the centre of the top-left pixel (docs/conventions.md). The photo
 // side is prepared once (PhotoEdgeModel); each evaluation then processes only
 // the new render.

@@ -26,7 +26,8 @@ cv::Mat scene(float scale, float offset) {  // a disc and a bar on a ramp, value
 
 TEST(OverlayImage, SizesAndTypes) {
   const cv::Mat render = scene(1, 0), photo = scene(1, 0);
-  for (const cv::Mat& out : {overlay_blend(render, photo), overlay_edges(render, photo), overlay_checker(render, photo, 16)}) {
+  for (const cv::Mat& out :
+       {overlay_blend(render, photo), overlay_edges(render, photo), overlay_checker(render, photo, 16)}) {
     EXPECT_EQ(out.type(), CV_8UC3);
     EXPECT_EQ(out.size(), photo.size());
   }

@@ -200,8 +200,9 @@ TEST(SetupSimilarity, MaskExcludesACorruptedRegion) {
   cv::RNG rng(9);
   for (int i = 0; i < 25; ++i) {  // blobs wholly inside `bad`
     const int r = rng.uniform(3, 12);
-    cv::circle(corrupted, {rng.uniform(bad.x + r, bad.x + bad.width - r), rng.uniform(bad.y + r, bad.y + bad.height - r)},
-               r, cv::Scalar(rng.uniform(0.0, 1.0)), cv::FILLED);
+    const int x = rng.uniform(bad.x + r, bad.x + bad.width - r), y = rng.uniform(bad.y + r, bad.y + bad.height - r);
+    const cv::Point centre(x, y);
+    cv::circle(corrupted, centre, r, cv::Scalar(rng.uniform(0.0, 1.0)), cv::FILLED);
   }
   cv::Mat mask(render.size(), CV_8U, cv::Scalar(255));
   mask(bad).setTo(0);
@@ -230,7 +231,8 @@ TEST(SetupSimilarity, ClutterMovesTheChamferLessThanTheCutoffBounds) {
   const std::vector<EdgePoint> model_edges = detect_edges(render);
   cv::RNG rng(17);
   for (int placed = 0; placed < 40;) {
-    const cv::Point c(rng.uniform(10, render.cols - 10), rng.uniform(10, render.rows - 10));
+    const int x = rng.uniform(10, render.cols - 10), y = rng.uniform(10, render.rows - 10);  // in this order
+    const cv::Point c(x, y);
     const int r = rng.uniform(2, 7);
     bool clear = true;  // no clutter near the model's edges
     for (const EdgePoint& p : model_edges) clear = clear && std::hypot(p.x_px - c.x, p.y_px - c.y) > r + 15;
@@ -244,7 +246,8 @@ TEST(SetupSimilarity, ClutterMovesTheChamferLessThanTheCutoffBounds) {
   const double extra = double(busy.photo_edge_pixels - clean.photo_edge_pixels);
   ASSERT_GT(extra, 100);
   const double share = extra / double(busy.photo_edge_pixels);
-  std::printf("clutter: %.0f extra photo edge points (%.0f %%); chamfer %.4f -> %.4f (r->p %.4f -> %.4f, p->r %.4f -> %.4f)\n",
+  std::printf("clutter: %.0f extra photo edge points (%.0f %%); chamfer %.4f -> %.4f"
+              " (r->p %.4f -> %.4f, p->r %.4f -> %.4f)\n",
               extra, 100 * share, clean.chamfer_px, busy.chamfer_px, clean.chamfer_render_to_photo_px,
               busy.chamfer_render_to_photo_px, clean.chamfer_photo_to_render_px, busy.chamfer_photo_to_render_px);
   EXPECT_LE(busy.chamfer_render_to_photo_px, clean.chamfer_render_to_photo_px + 0.02);
@@ -254,8 +257,8 @@ TEST(SetupSimilarity, ClutterMovesTheChamferLessThanTheCutoffBounds) {
 
   SimilarityOptions no_cutoff;
   no_cutoff.chamfer_cutoff_px = 1000;
-  const double unbounded =
-      compare_render_to_photo(render, cluttered, no_cutoff).chamfer_px - compare_render_to_photo(render, photo, no_cutoff).chamfer_px;
+  const double unbounded = compare_render_to_photo(render, cluttered, no_cutoff).chamfer_px -
+                           compare_render_to_photo(render, photo, no_cutoff).chamfer_px;
   std::printf("clutter without a cutoff moves the chamfer by %.3f px, with one by %.3f px\n", unbounded,
               busy.chamfer_px - clean.chamfer_px);
   EXPECT_GT(unbounded, 2 * (busy.chamfer_px - clean.chamfer_px));
@@ -286,6 +289,23 @@ TEST(SetupSimilarity, EdgeIndexFindsTheNearestSegment) {
     ASSERT_NEAR(index.distance_px(x, y), best, 1e-4) << x << ", " << y;  // the index works in float
   }
   EXPECT_EQ(EdgeDistanceIndex({}, cv::Size(10, 10), 3).distance_px(5, 5), 3);
+}
+
+// NaN in a float photo acts as a masked pixel.
+TEST(SetupSimilarity, NonFinitePhotoPixelsAreIgnoredLikeMaskedOnes) {
+  const cv::Mat render = scene();
+  const cv::Mat photo = as_photo(shifted(render, 0.5, 0.5), 1, 0, kNoise, 2);
+  cv::Mat holes = photo.clone();
+  holes(cv::Rect(200, 150, 20, 10)).setTo(std::nan(""));
+  cv::Mat mask(render.size(), CV_8U, cv::Scalar(255));
+  mask(cv::Rect(200, 150, 20, 10)).setTo(0);
+  const Similarity with_holes = compare_render_to_photo(render, holes);
+  const Similarity masked = compare_render_to_photo(render, photo, {}, mask);
+  EXPECT_TRUE(std::isfinite(with_holes.ncc) && std::isfinite(with_holes.gradient_ncc));
+  EXPECT_EQ(with_holes.ncc, masked.ncc);
+  EXPECT_EQ(with_holes.gradient_ncc, masked.gradient_ncc);
+  EXPECT_EQ(with_holes.chamfer_px, masked.chamfer_px);
+  EXPECT_EQ(with_holes.valid_pixels, masked.valid_pixels);
 }
 
 TEST(SetupSimilarity, AFlatRenderHasNoEdgesAndScoresWorst) {
