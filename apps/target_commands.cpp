@@ -77,7 +77,10 @@ void run_show(const std::string& path) {
   const std::size_t corners = board_corner_count(spec);
   int w = 0, h = 0;
   double spacing = 0;
-  if (corner_grid(spec, w, h, spacing))
+  if (is_single_marker(spec.kind))
+    std::printf("  4 corners: ids 0 to 3 = the top-left, top-right, bottom-right, bottom-left corner of the %s\n",
+                spec.kind == TargetKind::apriltag ? "square libapriltag detects" : "black border");
+  else if (corner_grid(spec, w, h, spacing))
     std::printf("  %zu corners: a %d x %d grid, %g mm apart, ids row by row from the top-left (id 0 at %g, %g mm)\n",
                 corners, w, h, spacing, spacing, spacing);
   else
@@ -85,7 +88,10 @@ void run_show(const std::string& path) {
                 "corner\n",
                 corners);
   const std::vector<BoardMarker> markers = board_markers(spec);
-  if (!markers.empty())
+  if (is_single_marker(spec.kind))
+    std::printf("  %s %d of %s\n", spec.kind == TargetKind::apriltag ? "tag" : "marker", spec.first_id,
+                spec.dictionary.c_str());
+  else if (!markers.empty())
     std::printf("  %zu %s, ids %d to %d\n", markers.size(), spec.kind == TargetKind::aprilgrid ? "tags" : "markers",
                 markers.front().id, markers.back().id);
   if (spec.kind == TargetKind::charuco) {

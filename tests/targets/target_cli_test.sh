@@ -29,6 +29,21 @@ has out.txt "144 corners: 4 per tag"
 expect 0 "$G" target show "$D/chessboard_9x6.yaml"
 has out.txt "pattern 225 x 150 mm"
 
+# --- single markers: show, print with the caption
+printf 'glasspiv_target: 1\nkind: aruco_marker\ndictionary: DICT_4X4_50\nmarker_id: 7\nmarker_size_mm: 30\n' >m.yaml
+expect 0 "$G" target show m.yaml
+has out.txt "4 corners: ids 0 to 3"
+has out.txt "marker 7 of DICT_4X4_50"
+expect 0 "$G" target print m.yaml -o m.svg --png m.png --dpi 300
+has m.svg "ArUco marker DICT_4X4_50 id 7, marker 30 mm"
+[ -s m.png ] || fail "no m.png"
+printf 'glasspiv_target: 1\nkind: apriltag\ndictionary: tag36h11\ntag_id: 3\ntag_size_mm: 40\n' >t.yaml
+expect 0 "$G" target print t.yaml -o t.svg
+has t.svg "AprilTag tag36h11 id 3, tag size 40 mm"
+printf 'glasspiv_target: 1\nkind: apriltag\ndictionary: tag36h11\ntag_id: 587\ntag_size_mm: 40\n' >bad_tag.yaml
+expect 2 "$G" target show bad_tag.yaml
+has err.txt "bad_tag.yaml: field 'tag_id'"
+
 # --- target print
 expect 0 "$G" target print "$D/charuco_11x8_15mm.yaml" -o board.svg --png board.png --dpi 150
 has board.svg 'width="180mm" height="159.5mm" viewBox="0 0 180 159.5"'

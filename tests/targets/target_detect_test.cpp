@@ -322,5 +322,39 @@ TEST(Detect, DetectorRejectsInvalidSpecs) {
   EXPECT_THROW(TargetDetector{bad}, InputError);
 }
 
+// ------------------------------------------------------------ single markers
+
+TEST(DetectorAccuracy, SingleMarkers) {
+  // A 30 mm marker 420 mm away (about 100 px) in the four poses, through
+  // TargetDetector: corners 0..3 at board_corners(), the bounds above.
+  for (const std::string dictionary : {"DICT_4X4_50", "tag36h11", "tagStandard41h12"}) {
+    TargetSpec s;
+    s.kind = opencv_dictionary_id(dictionary) >= 0 ? TargetKind::aruco_marker : TargetKind::apriltag;
+    s.dictionary = dictionary;
+    s.first_id = 7;
+    s.marker_size_mm = 30;
+    const Accuracy a = accuracy(s);
+    expect_accurate(a);
+  }
+}
+
+TEST(Detect, SingleMarkerOfAnotherIdIsNotFound) {
+  TargetSpec s;
+  s.kind = TargetKind::aruco_marker;
+  s.dictionary = "DICT_4X4_50";
+  s.first_id = 7;
+  s.marker_size_mm = 30;
+  const testing::SyntheticPhoto photo = photo_of(s, kPoses[0], 80);
+  TargetSpec other = s;
+  other.first_id = 8;
+  const DetectionResult r = TargetDetector(other).detect(photo.image, "seven.png");
+  EXPECT_TRUE(r.view.corners.empty());
+  EXPECT_EQ(r.markers_found, 0);
+  EXPECT_NE(r.note.find("id 8 not found (1 other"), std::string::npos) << r.note;
+  const DetectionResult found = TargetDetector(s).detect(photo.image, "seven.png");
+  ASSERT_EQ(found.view.corners.size(), 4u);
+  EXPECT_EQ(found.markers_found, 1);
+}
+
 }  // namespace
 }  // namespace glasspiv
