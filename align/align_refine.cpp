@@ -49,14 +49,24 @@ cv::Mat normalised(const cv::Mat& feature, const cv::Mat& valid) {
   return out;
 }
 
+// What a level compares: the blurred image itself (coarse levels: a wide basin
+// of attraction, blobs rather than edges) or its blurred gradient magnitude
+// (fine levels: edges, whatever the lighting).
+cv::Mat feature_of(const cv::Mat& image, double blur_px, bool intensity) {
+  if (!intensity) return blurred_gradient_magnitude(image, blur_px);
+  cv::Mat out;
+  cv::GaussianBlur(image, out, cv::Size(), blur_px, blur_px, cv::BORDER_REPLICATE);
+  return out;
+}
+
 // One level of the pyramid: the binned photo's features and what renders it.
 class LevelProblem : public ceres::CostFunction {
  public:
   LevelProblem(const TraceScene& scene, const SceneIndex& index, const SetupLook& look, const CameraModel& camera,
                const RigidTransform& start, const cv::Mat& photo_features, const cv::Mat& valid, const Layout& layout,
-               const RefineOptions& options, int binning, double distance_mm, int* renders)
+               const RefineOptions& options, bool intensity, double distance_mm, int* renders)
       : scene_(scene), index_(index), look_(look), camera_(camera), start_(start), photo_(photo_features),
-        valid_(valid), layout_(layout), options_(options), renders_(renders) {
+        valid_(valid), layout_(layout), options_(options), intensity_(intensity), renders_(renders) {
     for (int r = 0; r < valid.rows; ++r)
       for (int c = 0; c < valid.cols; ++c)
         if (valid.at<unsigned char>(r, c)) pixels_.push_back(r * valid.cols + c);
@@ -73,7 +83,6 @@ class LevelProblem : public ceres::CostFunction {
     if (layout.index) steps_[k++] = 2e-3;
     if (layout.glass)
       for (int i = 0; i < 3; ++i) steps_[k++] = third_px * distance_mm / f;
-    (void)binning;
   }
 
   // The residuals at p: normalised photo features minus normalised render features.
@@ -95,7 +104,7 @@ class LevelProblem : public ceres::CostFunction {
                                                           options_.trace, options_.samples_per_axis, options_.threads);
     ++*renders_;
     cv::Mat render(camera_.height_px(), camera_.width_px(), CV_32F, radiance.data());
-    const cv::Mat features = normalised(blurred_gradient_magnitude(render, options_.blur_px), valid_);
+    const cv::Mat features = normalised(feature_of(render, options_.blur_px, intensity_), valid_);
     const float* a = photo_.ptr<float>(0);
     const float* b = features.ptr<float>(0);
     for (std::size_t i = 0; i < pixels_.size(); ++i) out[i] = a[pixels_[i]] - b[pixels_[i]];
@@ -130,6 +139,7 @@ class LevelProblem : public ceres::CostFunction {
   cv::Mat photo_, valid_;
   Layout layout_;
   const RefineOptions& options_;
+  bool intensity_;
   int* renders_;
   std::vector<int> pixels_;
   std::vector<double> steps_;
@@ -169,10 +179,11 @@ RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, co
     SimilarityOptions similarity;
     similarity.edge_blur_px = options.blur_px;
     const PhotoEdgeModel photo_model(photo, similarity);
-    const cv::Mat features = normalised(photo_model.gradient_magnitude(), photo_model.valid_mask());
+    const bool intensity = b >= options.intensity_from_binning;
+    const cv::Mat features = normalised(feature_of(photo, options.blur_px, intensity), photo_model.valid_mask());
     int renders = 0;
     auto* cost = new LevelProblem(scene, *index, look, level_camera, start_camera_from_world, features,
-                                  photo_model.valid_mask(), layout, options, b, distance_mm, &renders);
+                                  photo_model.valid_mask(), layout, options, intensity, distance_mm, &renders);
     RefineLevel level;
     level.binning = b;
     level.width_px = level_camera.width_px();

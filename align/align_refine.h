@@ -42,7 +42,10 @@ struct RefineOptions {
   std::vector<int> binning_levels = {8, 4, 2, 1};  // coarse to fine; each >= 1
   double blur_px = 1.5;           // Gaussian sigma in binned pixels, every level
   int samples_per_axis = 1;       // per pixel and axis in the renders
-  int max_iterations = 8;         // Levenberg-Marquardt steps per level
+  int max_iterations = 20;        // Levenberg-Marquardt steps per level
+  // Levels binned this much or more compare the blurred intensities (a wide
+  // basin of attraction for a far start), the finer ones the gradients.
+  int intensity_from_binning = 4;
   TraceOptions trace{true, 1e-2, 32};
   int threads = 0;                // render threads; 0: all
   // Called after each evaluation (level index, renders so far) for a progress bar.

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "align/align_pose.h"
 #include "align/align_refine.h"
@@ -18,6 +19,7 @@
 #include "align/overlay_image.h"
 #include "align/prepared_scene.h"
 #include "align/scene_update.h"
+#include "align/sensitivity.h"
 #include "align/setup_similarity.h"
 #include "apps/cli_checks.h"
 #include "apps/cli_files.h"
@@ -39,6 +41,11 @@ struct AlignOptions {
   bool pinhole = false, refine_focal = false, no_reflections = false;
   bool refine_index = false, refine_glass = false;
   std::vector<int> levels = {8, 4, 2, 1};
+  double tol_camera_mm = ModelTolerances{}.camera_position_mm, tol_camera_deg = ModelTolerances{}.camera_rotation_deg;
+  double tol_glass_mm = ModelTolerances{}.glass_position_mm, tol_diameter_mm = ModelTolerances{}.sphere_diameter_mm;
+  double tol_index = ModelTolerances{}.refractive_index;
+  int step_px = 8, mc_samples = 0;
+  unsigned seed = 1;
   int samples = 2, threads = 0;
   double blur_px = 1.5;
 };
@@ -343,6 +350,66 @@ void run_refine(const AlignOptions& o) {
   write_scene_out(o, ps, r.camera_from_world);
 }
 
+// --- align sensitivity ----------------------------------------------------------
+// A heat map of one displacement per grid block at the camera's size: viridis
+// up to the 95th percentile (brighter = more), grey where nothing is measured.
+cv::Mat heat_map(const std::vector<float>& values, const std::vector<unsigned char>& valid, int cols, int rows,
+                 int step_px, double top) {
+  cv::Mat grey(rows, cols, CV_8UC1);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      grey.at<unsigned char>(r, c) = static_cast<unsigned char>(
+          std::clamp(255.0 * values[static_cast<std::size_t>(r) * cols + c] / std::max(top, 1e-30), 0.0, 255.0));
+  cv::Mat colour;
+  cv::applyColorMap(grey, colour, cv::COLORMAP_VIRIDIS);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      if (!valid[static_cast<std::size_t>(r) * cols + c]) colour.at<cv::Vec3b>(r, c) = cv::Vec3b(90, 90, 90);
+  cv::Mat big;
+  cv::resize(colour, big, cv::Size(cols * step_px, rows * step_px), 0, 0, cv::INTER_NEAREST);
+  return big;
+}
+
+void run_sensitivity(const AlignOptions& o) {
+  if (lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
+  if (o.step_px < 1) throw InputError("", "--step-px", "must be 1 or more");
+  if (o.mc_samples == 1) throw InputError("", "--monte-carlo", "needs 2 samples or more");
+  const PreparedScene ps = prepare_scene(o.scene, o.camera);
+  check_outputs(scene_input_files(ps.scene), {{o.output, "-o"}, {sibling(o.output, "_px"), "-o"}, {o.json, "--json"}});
+  ModelTolerances tol;
+  tol.camera_position_mm = o.tol_camera_mm;
+  tol.camera_rotation_deg = o.tol_camera_deg;
+  tol.glass_position_mm = o.tol_glass_mm;
+  tol.sphere_diameter_mm = o.tol_diameter_mm;
+  tol.refractive_index = o.tol_index;
+  SensitivityOptions options;
+  options.grid_step_px = o.step_px;
+  options.threads = o.threads;
+  if (o.mc_samples > 1) options.method = SensitivityMethod::monte_carlo;
+  const SensitivityMap m = model_sensitivity(ps.trace, ps.camera().model, *ps.camera().camera_from_world, tol,
+                                             std::max(o.mc_samples, 2), o.seed, options);
+  std::printf("sensitivity of camera '%s' (%s, %dx%d samples every %d px, %d see the sheet directly)\n",
+              ps.camera_name().c_str(), o.mc_samples > 1 ? "Monte Carlo" : "first order", m.width, m.height,
+              m.grid_step_px, m.valid_points);
+  std::printf("  %-22s %12s %12s %12s %12s\n", "parameter (1-sigma)", "median px", "95% px", "median mm", "95% mm");
+  nlohmann::json j = {{"camera", ps.camera_name()}, {"valid_points", m.valid_points}};
+  for (const SensitivityParameter& p : m.parameters) {
+    std::printf("  %-22s %12.4g %12.4g %12.4g %12.4g\n", fmt::format("{} ({:g})", p.name, p.sigma).c_str(),
+                p.median_px, p.p95_px, p.median_mm, p.p95_mm);
+    j["parameters"].push_back({{"name", p.name}, {"sigma", p.sigma}, {"median_px", p.median_px}, {"p95_px", p.p95_px},
+                               {"median_mm", p.median_mm}, {"p95_mm", p.p95_mm}});
+  }
+  std::printf("  %-22s %12.4g %12.4g %12.4g %12.4g\n", "all together", m.median_px, m.p95_px, m.median_mm, m.p95_mm);
+  j["total"] = {{"median_px", m.median_px}, {"p95_px", m.p95_px}, {"median_mm", m.median_mm}, {"p95_mm", m.p95_mm}};
+  if (m.skipped_glass_meshes) std::printf("  (%d glass meshes kept in place)\n", m.skipped_glass_meshes);
+  write_png(o.output, heat_map(m.displacement_mm, m.valid, m.width, m.height, m.grid_step_px, m.p95_mm));
+  write_png(sibling(o.output, "_px"), heat_map(m.displacement_px, m.valid, m.width, m.height, m.grid_step_px, m.p95_px));
+  std::printf("wrote %s (sheet point seen by each pixel, mm; yellow = %.3g mm and more) and %s (its image, px; "
+              "yellow = %.3g px), grey where no direct view of the sheet\n",
+              o.output.c_str(), m.p95_mm, sibling(o.output, "_px").c_str(), m.p95_px);
+  write_json(o.json, j);
+}
+
 void add_common(CLI::App* c, AlignOptions& o, bool many_photos) {
   c->add_option("SCENE", o.scene, "scene file (docs/scene.md)")->required()->check(CLI::ExistingFile);
   if (many_photos)
@@ -400,6 +467,25 @@ void register_align_commands(CLI::App& app) {
   refine->add_flag("--no-reflections", o.no_reflections, "no reflected branches in the renders");
   refine->add_option("--threads", o.threads, "threads (0: all)");
   refine->callback([] { run_refine(o); });
+
+  CLI::App* sens = align->add_subcommand(
+      "sensitivity", "how far sheet points move (mm on the sheet, px in the image) when the model's pose, glass "
+                     "position, sphere diameters and refractive index vary within their tolerances (1-sigma)");
+  sens->add_option("SCENE", o.scene, "scene file (docs/scene.md)")->required()->check(CLI::ExistingFile);
+  sens->add_option("--camera", o.camera, "the scene's camera (default: the first)");
+  sens->add_option("-o", o.output, "heat map PNG of the mm displacement (also <stem>_px.png)")->required();
+  sens->add_option("--json", o.json, "also write the table as JSON");
+  sens->add_option("--camera-mm", o.tol_camera_mm, "camera position 1-sigma per axis, mm")->check(CLI::NonNegativeNumber);
+  sens->add_option("--camera-deg", o.tol_camera_deg, "camera rotation 1-sigma per axis, deg")->check(CLI::NonNegativeNumber);
+  sens->add_option("--glass-mm", o.tol_glass_mm, "glass position 1-sigma per axis, mm")->check(CLI::NonNegativeNumber);
+  sens->add_option("--diameter-mm", o.tol_diameter_mm, "sphere diameter 1-sigma, mm")->check(CLI::NonNegativeNumber);
+  sens->add_option("--index", o.tol_index, "refractive index 1-sigma")->check(CLI::NonNegativeNumber);
+  sens->add_option("--step-px", o.step_px, "one sample per block of this many pixels")->check(CLI::Range(1, 4096));
+  sens->add_option("--monte-carlo", o.mc_samples, "Monte Carlo with this many samples instead of first order")
+      ->check(CLI::Range(0, 100000));
+  sens->add_option("--seed", o.seed, "Monte Carlo seed");
+  sens->add_option("--threads", o.threads, "threads (0: all)");
+  sens->callback([] { run_sensitivity(o); });
 }
 
 }  // namespace glasspiv

@@ -39,7 +39,8 @@ cams="$src/data/cameras"
 
 # --help on every command.
 for cmd in "" "camera" "camera convert" "camera show" "camera compare" "demo" "calib" "calib detect" \
-  "calib intrinsics" "calib report" "target" "target print" "target show" "render" "correct" "coverage"; do
+  "calib intrinsics" "calib report" "target" "target print" "target show" "render" "correct" "coverage" \
+  "align" "align pose" "align check" "align refine" "align sensitivity"; do
   # shellcheck disable=SC2086
   "$glasspiv" $cmd --help >"$work/out" 2>&1 && grep -q "Usage" "$work/out" && ok || fail "glasspiv $cmd --help"
 done
@@ -302,6 +303,17 @@ done
 [ "$bad" -eq 0 ] && ok || fail "a killed series left an unreadable frame"
 expect_ok "$glasspiv" correct "$work/two.yaml" --camera small "$work/frames" -o "$work/killed" --method lsq
 [ "$(ls "$work/killed"/f*.tif | wc -l)" -eq 40 ] && ok || fail "the rerun after kill -9 did not complete the series"
+
+# align: refusals before any work, and a sensitivity map of the reactor.
+reactor="$src/data/scenes/reactor.yaml"
+"$glasspiv" render "$reactor" --setup -o "$work/setup_photo.png" --binning 8 >/dev/null 2>&1 || fail "render --setup for align"
+expect_error 2 "reactor.yaml" "no fiducials" -- "$glasspiv" align pose "$reactor" "$work/setup_photo.png"
+expect_error 2 "setup_photo.png" "size" "px" -- "$glasspiv" align check "$reactor" "$work/setup_photo.png" -o "$work/ov.png"
+expect_error 2 "ov.txt" ".png" -- "$glasspiv" align check "$reactor" "$work/setup_photo.png" -o "$work/ov.txt"
+expect_error 2 "--levels" -- "$glasspiv" align refine "$reactor" "$work/setup_photo.png" --levels 0
+expect_ok "$glasspiv" align sensitivity "$reactor" -o "$work/sens.png" --step-px 64 --json "$work/sens.json"
+[ -s "$work/sens.png" ] && [ -s "$work/sens_px.png" ] && grep -q median_mm "$work/sens.json" && ok \
+  || fail "align sensitivity outputs"
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
