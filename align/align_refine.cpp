@@ -7,6 +7,7 @@
 #include <ceres/ceres.h>
 #include <opencv2/imgproc.hpp>
 
+#include "align/refraction_pose.h"
 #include "calib/fit/ceres_logging.h"
 #include "render/scene_index.h"
 #include "util/stopwatch.h"
@@ -64,13 +65,18 @@ class LevelProblem : public ceres::CostFunction {
  public:
   LevelProblem(const TraceScene& scene, const SceneIndex& index, const SetupLook& look, const CameraModel& camera,
                const RigidTransform& start, const cv::Mat& photo_features, const cv::Mat& valid, const Layout& layout,
-               const RefineOptions& options, bool intensity, double distance_mm, int* renders)
+               const RefineOptions& options, bool intensity, double distance_mm, int binning,
+               const std::vector<RefineCorner>& corners, int* renders)
       : scene_(scene), index_(index), look_(look), camera_(camera), start_(start), photo_(photo_features),
-        valid_(valid), layout_(layout), options_(options), intensity_(intensity), renders_(renders) {
+        valid_(valid), layout_(layout), options_(options), intensity_(intensity), binning_(binning),
+        corners_(corners), renders_(renders) {
     for (int r = 0; r < valid.rows; ++r)
       for (int c = 0; c < valid.cols; ++c)
         if (valid.at<unsigned char>(r, c)) pixels_.push_back(r * valid.cols + c);
-    set_num_residuals(static_cast<int>(pixels_.size()));
+    // One measurement per blur footprint, of feature_sigma each.
+    const double footprint_px = M_PI * std::pow(2 * std::max(options.blur_px, 0.5), 2);
+    picture_weight_ = std::sqrt(1.0 / footprint_px) / options.feature_sigma;
+    set_num_residuals(static_cast<int>(pixels_.size() + 2 * corners.size()));
     mutable_parameter_block_sizes()->push_back(layout.size());
     // Steps that move the picture by a third of a pixel of this level.
     const double f = camera.fx_px(), third_px = 1.0 / 3.0;
@@ -107,9 +113,51 @@ class LevelProblem : public ceres::CostFunction {
     const cv::Mat features = normalised(feature_of(render, options_.blur_px, intensity_), valid_);
     const float* a = photo_.ptr<float>(0);
     const float* b = features.ptr<float>(0);
-    for (std::size_t i = 0; i < pixels_.size(); ++i) out[i] = a[pixels_[i]] - b[pixels_[i]];
+    for (std::size_t i = 0; i < pixels_.size(); ++i) out[i] = picture_weight_ * (a[pixels_[i]] - b[pixels_[i]]);
+    double* corner_out = out + pixels_.size();
+    lost_ = 0;
+    for (std::size_t i = 0; i < corners_.size(); ++i) {
+      const Eigen::Vector2d px = corner_residual_px(*scene, *index, model, m.camera_from_world, corners_[i]);
+      corner_out[2 * i] = px.x() / options_.corner_sigma_px;
+      corner_out[2 * i + 1] = px.y() / options_.corner_sigma_px;
+    }
     if (options_.progress) options_.progress(0, *renders_);
     return true;
+  }
+
+  // Full-resolution px; a corner without a traced image counts as a fixed
+  // miss (zero: it neither pulls nor breaks the solve) and is counted.
+  Eigen::Vector2d corner_residual_px(const TraceScene& scene, const SceneIndex& index, const CameraModel& model,
+                                     const RigidTransform& camera_from_world, const RefineCorner& c) const {
+    const double b = binning_;
+    const auto start = model.project(camera_from_world.apply(c.world_mm));
+    if (!start) {
+      ++lost_;
+      return Eigen::Vector2d::Zero();
+    }
+    TracedProjectionOptions traced;
+    const TracedProjection t = project_through_scene(scene, index, model, camera_from_world, c.world_mm, c.solid,
+                                                     *start, traced);
+    if (!t.ok()) {
+      ++lost_;
+      return Eigen::Vector2d::Zero();
+    }
+    // Binned pixel p_b covers full-resolution (p_b + 0.5) b - 0.5.
+    return (t.pixel_px.array() + 0.5) * b - 0.5 - c.pixel_px.array();
+  }
+
+  // RMS over the corners with an image, full-resolution px, at p.
+  double corner_rms_px(const double* p, int* lost) const {
+    const Model m = model_of(p, layout_, start_);
+    const TraceScene adjusted = adjusted_glass(scene_, m.index_offset, m.glass_offset_mm);
+    const std::unique_ptr<SceneIndex> index = make_scene_index(adjusted);
+    const CameraModel model = m.focal_scale == 1 ? camera_ : scaled_focal(camera_, m.focal_scale);
+    lost_ = 0;
+    double sum2 = 0;
+    for (const RefineCorner& c : corners_) sum2 += corner_residual_px(adjusted, *index, model, m.camera_from_world, c).squaredNorm();
+    *lost = lost_;
+    const int n = static_cast<int>(corners_.size()) - lost_;
+    return n > 0 ? std::sqrt(sum2 / n) : 0;
   }
 
   bool Evaluate(double const* const* parameters, double* residual, double** jacobians) const override {
@@ -140,7 +188,11 @@ class LevelProblem : public ceres::CostFunction {
   Layout layout_;
   const RefineOptions& options_;
   bool intensity_;
+  int binning_;
+  const std::vector<RefineCorner>& corners_;
   int* renders_;
+  double picture_weight_ = 1;
+  mutable int lost_ = 0;
   std::vector<int> pixels_;
   std::vector<double> steps_;
 };
@@ -158,7 +210,8 @@ cv::Mat binned_photo(const cv::Mat& photo, int b, int width, int height) {
 
 RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, const CameraModel& camera,
                               const RigidTransform& start_camera_from_world, const cv::Mat& photo32f,
-                              const RefineParameters& parameters, const RefineOptions& options) {
+                              const RefineParameters& parameters, const RefineOptions& options,
+                              const std::vector<RefineCorner>& corners) {
   if (photo32f.type() != CV_32FC1 || photo32f.cols != camera.width_px() || photo32f.rows != camera.height_px())
     throw std::invalid_argument("refine_alignment: the photo must be CV_32FC1 of the camera's size");
   if (options.binning_levels.empty()) throw std::invalid_argument("refine_alignment: no binning levels");
@@ -183,7 +236,7 @@ RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, co
     const cv::Mat features = normalised(feature_of(photo, options.blur_px, intensity), photo_model.valid_mask());
     int renders = 0;
     auto* cost = new LevelProblem(scene, *index, look, level_camera, start_camera_from_world, features,
-                                  photo_model.valid_mask(), layout, options, intensity, distance_mm, &renders);
+                                  photo_model.valid_mask(), layout, options, intensity, distance_mm, b, corners, &renders);
     RefineLevel level;
     level.binning = b;
     level.width_px = level_camera.width_px();
@@ -210,6 +263,7 @@ RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, co
     ceres::Solve(solver, &problem, &summary);
     level.iterations = static_cast<int>(summary.iterations.size()) - 1;
     level.gradient_ncc_after = ncc_at(p);
+    if (!corners.empty()) level.corner_rms_px_after = cost->corner_rms_px(p.data(), &level.corners_lost);
     level.renders = renders + 2;
     level.seconds = level_time.seconds();
     result.renders += level.renders;

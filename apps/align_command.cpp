@@ -39,7 +39,7 @@ struct AlignOptions {
   std::string scene, camera, output, json, scene_out;
   std::vector<std::string> photos;
   bool pinhole = false, refine_focal = false, no_reflections = false;
-  bool refine_index = false, refine_glass = false;
+  bool refine_index = false, refine_glass = false, no_fiducials = false;
   std::vector<int> levels = {8, 4, 2, 1};
   double tol_camera_mm = ModelTolerances{}.camera_position_mm, tol_camera_deg = ModelTolerances{}.camera_rotation_deg;
   double tol_glass_mm = ModelTolerances{}.glass_position_mm, tol_diameter_mm = ModelTolerances{}.sphere_diameter_mm;
@@ -307,14 +307,30 @@ void run_refine(const AlignOptions& o) {
   options.trace = trace_options(o);
   options.threads = o.threads;
   options.samples_per_axis = 1;
-  std::printf("refining camera '%s' on %s: levels", ps.camera_name().c_str(), o.photos.front().c_str());
+  // The fiducial corners join the objective (they pin the pose down where the
+  // picture of a narrow view cannot).
+  std::vector<RefineCorner> corners;
+  if (!o.no_fiducials) {
+    const std::vector<SceneFiducial> fiducials = scene_fiducials(ps.scene);
+    if (!fiducials.empty())
+      for (const FiducialCorner& c : detect_fiducials(read_photo_gray8(o.photos.front()), fiducials, o.photos.front()).corners)
+        corners.push_back({c.world_mm,
+                           ps.info.rectangle_solids[static_cast<std::size_t>(fiducials[static_cast<std::size_t>(c.fiducial)].rectangle)],
+                           c.pixel_px});
+  }
+  std::printf("refining camera '%s' on %s with %zu fiducial corners: levels", ps.camera_name().c_str(),
+              o.photos.front().c_str(), corners.size());
   for (int b : o.levels) std::printf(" %d", b);
   std::printf(" (binning)\n");
-  const RefineResult r = refine_alignment(ps.trace, look_of(ps), model, start, photo, parameters, options);
+  const RefineResult r = refine_alignment(ps.trace, look_of(ps), model, start, photo, parameters, options, corners);
   for (const RefineLevel& l : r.levels)
-    std::printf("  binning %2d (%dx%d): gradient NCC %.4f -> %.4f in %d steps, %d renders, %.1f s\n", l.binning,
+    std::printf("  binning %2d (%dx%d): gradient NCC %.4f -> %.4f in %d steps, %d renders, %.1f s%s\n", l.binning,
                 l.width_px, l.height_px, l.gradient_ncc_before, l.gradient_ncc_after, l.iterations, l.renders,
-                l.seconds);
+                l.seconds,
+                corners.empty() ? ""
+                                : fmt::format("; corners RMS {:.3f} px{}", l.corner_rms_px_after,
+                                              l.corners_lost ? fmt::format(" ({} without an image)", l.corners_lost) : "")
+                                      .c_str());
   const auto [mm, deg] = pose_change(start, r.camera_from_world);
   std::printf("refined pose: %s\n  moved %.4f mm, %.5f deg from the start; %d renders in %.1f s\n",
               describe_pose(r.camera_from_world).c_str(), mm, deg, r.renders, r.seconds);
@@ -459,6 +475,7 @@ void register_align_commands(CLI::App& app) {
   refine->add_option("--levels", o.levels, "binning factors, coarse to fine")->delimiter(',');
   refine->add_option("--blur-px", o.blur_px, "Gaussian blur of the compared gradients, binned px")
       ->check(CLI::Range(0.0, 20.0));
+  refine->add_flag("--no-fiducials", o.no_fiducials, "the picture alone (ignore the fiducial corners in the photo)");
   refine->add_flag("--refine-focal", o.refine_focal, "also optimise one scale on the focal length");
   refine->add_flag("--refine-index", o.refine_index, "also optimise an offset on every glass solid's index");
   refine->add_flag("--refine-glass", o.refine_glass, "also optimise one translation of all glass solids");
