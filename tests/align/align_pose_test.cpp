@@ -13,7 +13,11 @@
 #include "sim/marker_setup.h"
 #include "sim/setup_photo.h"
 #include "tests/temp_dir.h"
+#include "util/atomic_file.h"
 #include "util/input_error.h"
+
+#include <opencv2/aruco.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace glasspiv {
 namespace {
@@ -126,6 +130,92 @@ TEST(AlignPose, TooFewCornersAreRefusedAndOneMarkerReportsItsWeakness) {
     EXPECT_NE(std::string(e.what()).find("mm"), std::string::npos) << e.what();
     std::printf("one marker, limit 0.1 mm: %s\n", e.what());
   }
+}
+
+// A marker copied elsewhere in the photo (its id seen twice) and a marker the
+// scene does not have: both reported, neither used, the pose unharmed.
+TEST(AlignPose, DuplicatedAndUnknownIdsAreReportedAndNotUsed) {
+  TempDir dir("align_pose");
+  const MarkerPhoto s = make_setup(dir.file("setup"), {});
+  cv::Mat photo = s.photo.clone();
+  const FiducialsInPhoto clean = detect_fiducials(photo, s.fiducials, "photo");
+  // Marker 0's bounding box, copied to the image centre (the frame leaves it empty).
+  std::vector<cv::Point2f> c0;
+  for (const FiducialCorner& c : clean.corners)
+    if (c.fiducial == 0) c0.emplace_back(static_cast<float>(c.pixel_px.x()), static_cast<float>(c.pixel_px.y()));
+  ASSERT_EQ(c0.size(), 4u);
+  cv::Rect box = cv::boundingRect(c0);
+  box.x -= 12, box.y -= 12, box.width += 24, box.height += 24;
+  photo(box).copyTo(photo(cv::Rect(photo.cols / 2 - box.width / 2, photo.rows / 2 - box.height / 2, box.width, box.height)));
+  // An id the scene does not carry, drawn white-framed below the centre.
+  cv::Mat stranger;
+  cv::aruco::drawMarker(cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_50), 33, 48, stranger);
+  cv::Mat framed(72, 72, CV_8UC1, cv::Scalar(235));
+  stranger.copyTo(framed(cv::Rect(12, 12, 48, 48)));
+  framed.copyTo(photo(cv::Rect(photo.cols / 2 - 36, photo.rows / 2 + 80, 72, 72)));
+
+  const FiducialsInPhoto found = detect_fiducials(photo, s.fiducials, "photo");
+  ASSERT_EQ(found.duplicated_markers.size(), 1u);
+  EXPECT_EQ(found.duplicated_markers[0], "DICT_4X4_50 id 0");
+  ASSERT_EQ(found.unknown_markers.size(), 1u);
+  EXPECT_EQ(found.unknown_markers[0], "DICT_4X4_50 id 33");
+  EXPECT_EQ(found.corners_per_fiducial[0], 0);
+  EXPECT_EQ(found.corners.size(), 76u);
+  const AlignedPose pose =
+      align_pose(s.ps.trace, *s.index, rectangle_solids(s), s.fiducials, s.ps.camera().model, found.corners);
+  const PoseError e = pose_error(pose.fit.camera_from_world, *s.ps.camera().camera_from_world);
+  EXPECT_LT(e.position_mm, 0.05);
+  EXPECT_LT(e.rotation_deg, 0.01);
+}
+
+// Corners on one line (the top edges of the markers of one side of the frame)
+// cannot give a pose: refused as collinear.
+TEST(AlignPose, CornersOnOneLineAreRefused) {
+  TempDir dir("align_pose");
+  const MarkerPhoto s = make_setup(dir.file("setup"), {});
+  const FiducialsInPhoto found = detect_fiducials(s.photo, s.fiducials, "photo");
+  // The first ring's top side: markers at y = 75 mm, z = 0; corners 0 and 1 lie at y = 75 + 4 mm.
+  std::vector<FiducialCorner> line;
+  for (const FiducialCorner& c : found.corners)
+    if (c.corner_id <= 1 && std::abs(c.world_mm.y() - 79) < 0.1 && std::abs(c.world_mm.z()) < 1e-9) line.push_back(c);
+  ASSERT_GE(line.size(), 4u);
+  try {
+    align_pose(s.ps.trace, *s.index, rectangle_solids(s), s.fiducials, s.ps.camera().model, line);
+    FAIL() << "a pose from collinear corners was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "fiducials");
+    EXPECT_NE(std::string(e.what()).find("collinear"), std::string::npos) << e.what();
+  }
+}
+
+// A marker turned almost edge-on (87.5 degrees): it is not decoded or its
+// corners are dropped as outliers; the pose from the others stays right.
+TEST(AlignPose, AMarkerSeenEdgeOnDoesNotSpoilThePose) {
+  TempDir dir("align_pose");
+  const std::string scene = write_marker_setup(dir.file("setup"), {});
+  std::string text = read_file(scene);
+  const std::size_t at = text.find("normal: [0, 0, -1]");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, std::string("normal: [0, 0, -1]").size(), "normal: [0.99905, 0, -0.0436]");
+  write_file_atomically(scene, text);
+  MarkerPhoto s;
+  s.ps = prepare_scene(scene, "cam");
+  s.fiducials = scene_fiducials(s.ps.scene);
+  s.index = make_scene_index(s.ps.trace);
+  SetupLook look;
+  look.background_radiance = 0.35;
+  look.textures = s.ps.textures_by_solid();
+  const CameraModel& model = s.ps.camera().model;
+  s.photo = photo_from_radiance(
+      render_setup(s.ps.trace, look, model, *s.ps.camera().camera_from_world, TraceOptions{}, 3, 0),
+      model.width_px(), model.height_px(), PhotoLook{});
+  const FiducialsInPhoto found = detect_fiducials(s.photo, s.fiducials, "photo");
+  std::printf("edge-on marker: %d corners found on it\n", found.corners_per_fiducial[0]);
+  const AlignedPose pose =
+      align_pose(s.ps.trace, *s.index, rectangle_solids(s), s.fiducials, model, found.corners);
+  const PoseError e = pose_error(pose.fit.camera_from_world, *s.ps.camera().camera_from_world);
+  EXPECT_LT(e.position_mm, 0.05);
+  EXPECT_LT(e.rotation_deg, 0.01);
 }
 
 TEST(AlignPose, APhotoWithoutMarkersFindsNone) {
