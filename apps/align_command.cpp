@@ -9,6 +9,7 @@
 #include <memory>
 
 #include <fmt/format.h>
+#include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -45,6 +46,7 @@ struct AlignOptions {
   double tol_glass_mm = ModelTolerances{}.glass_position_mm, tol_diameter_mm = ModelTolerances{}.sphere_diameter_mm;
   double tol_index = ModelTolerances{}.refractive_index;
   int step_px = 8, mc_samples = 0;
+  std::string pose_json;
   unsigned seed = 1;
   int samples = 2, threads = 0;
   double blur_px = 1.5;
@@ -185,6 +187,12 @@ void run_pose(const AlignOptions& o) {
                       {"rotation_sigma_deg", fit.rotation_sigma_deg},
                       {"glass_displacement_px", pose.glass_displacement_px},
                       {"focal_scale", fit.focal_scale}};
+  // The pose's covariance (rvec rad, tvec mm of camera_from_world), for `align sensitivity --pose-json`.
+  for (int r = 0; r < 6; ++r) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int c = 0; c < 6; ++c) row.push_back(fit.covariance(r, c));
+    j["covariance"].push_back(row);
+  }
   for (const FiducialFit& f : pose.fiducials)
     j["fiducials"].push_back({{"field", f.field}, {"corners", f.corners}, {"rms_px", f.rms_px}, {"max_px", f.max_px}});
   write_json(o.json, j);
@@ -386,18 +394,50 @@ cv::Mat heat_map(const std::vector<float>& values, const std::vector<unsigned ch
   return big;
 }
 
+// The 6 x 6 covariance `align pose --json` wrote.
+Eigen::Matrix<double, 6, 6> pose_covariance_from_json(const std::string& path) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(read_file(path));
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path, "", std::string("not JSON: ") + e.what());
+  }
+  const auto& rows = j.contains("covariance") ? j["covariance"] : nlohmann::json();
+  if (!rows.is_array() || rows.size() != 6)
+    throw InputError(path, "covariance", "needs 6 rows of 6 numbers (write it with `glasspiv align pose --json`)");
+  Eigen::Matrix<double, 6, 6> c;
+  for (int r = 0; r < 6; ++r) {
+    if (!rows[r].is_array() || rows[r].size() != 6) throw InputError(path, "covariance", "needs 6 rows of 6 numbers");
+    for (int k = 0; k < 6; ++k) {
+      if (!rows[r][k].is_number() || !std::isfinite(rows[r][k].get<double>()))
+        throw InputError(path, fmt::format("covariance[{}][{}]", r, k), "must be a finite number");
+      c(r, k) = rows[r][k].get<double>();
+    }
+  }
+  if ((c - c.transpose()).norm() > 1e-9 * std::max(1.0, c.norm()))
+    throw InputError(path, "covariance", "is not symmetric");
+  if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(c).eigenvalues().minCoeff() < -1e-12 * c.norm())
+    throw InputError(path, "covariance", "is not positive semi-definite");
+  return c;
+}
+
 void run_sensitivity(const AlignOptions& o) {
   if (lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
   if (o.step_px < 1) throw InputError("", "--step-px", "must be 1 or more");
   if (o.mc_samples == 1) throw InputError("", "--monte-carlo", "needs 2 samples or more");
   const PreparedScene ps = prepare_scene(o.scene, o.camera);
-  check_outputs(scene_input_files(ps.scene), {{o.output, "-o"}, {sibling(o.output, "_px"), "-o"}, {o.json, "--json"}});
+  std::vector<std::string> inputs = scene_input_files(ps.scene);
+  if (!o.pose_json.empty()) inputs.push_back(o.pose_json);
+  std::vector<OutputFile> outputs = {{o.output, "-o"}, {sibling(o.output, "_px"), "-o"}};
+  if (!o.json.empty()) outputs.push_back({o.json, "--json"});
+  check_outputs(inputs, outputs);
   ModelTolerances tol;
   tol.camera_position_mm = o.tol_camera_mm;
   tol.camera_rotation_deg = o.tol_camera_deg;
   tol.glass_position_mm = o.tol_glass_mm;
   tol.sphere_diameter_mm = o.tol_diameter_mm;
   tol.refractive_index = o.tol_index;
+  if (!o.pose_json.empty()) tol.pose_covariance = pose_covariance_from_json(o.pose_json);
   SensitivityOptions options;
   options.grid_step_px = o.step_px;
   options.threads = o.threads;
@@ -452,7 +492,7 @@ void register_align_commands(CLI::App& app) {
       "pose", "the camera's pose from the scene's fiducials (ArUco, AprilTag, boards) found in its photos; corners "
               "seen through glass are projected through the traced model");
   add_common(pose, o, true);
-  pose->add_option("--scene-out", o.scene_out, "write the scene with the new pose (in the scene's folder)");
+  pose->add_option("-o,--scene-out", o.scene_out, "write the scene with the new pose (in the scene's folder)");
   pose->add_flag("--pinhole", o.pinhole, "plain pinhole projection only (ignore the glass between camera and markers)");
   pose->add_flag("--refine-focal", o.refine_focal, "also fit one scale on the focal length");
   pose->callback([] { run_pose(o); });
@@ -497,6 +537,9 @@ void register_align_commands(CLI::App& app) {
   sens->add_option("--glass-mm", o.tol_glass_mm, "glass position 1-sigma per axis, mm")->check(CLI::NonNegativeNumber);
   sens->add_option("--diameter-mm", o.tol_diameter_mm, "sphere diameter 1-sigma, mm")->check(CLI::NonNegativeNumber);
   sens->add_option("--index", o.tol_index, "refractive index 1-sigma")->check(CLI::NonNegativeNumber);
+  sens->add_option("--pose-json", o.pose_json,
+                   "the pose covariance from `align pose --json` in place of --camera-mm and --camera-deg")
+      ->check(CLI::ExistingFile);
   sens->add_option("--step-px", o.step_px, "one sample per block of this many pixels")->check(CLI::Range(1, 4096));
   sens->add_option("--monte-carlo", o.mc_samples, "Monte Carlo with this many samples instead of first order")
       ->check(CLI::Range(0, 100000));
