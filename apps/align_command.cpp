@@ -3,6 +3,7 @@
 //   align check  SCENE PHOTO --camera NAME -o overlay.png: render vs photo, scored
 //   align refine SCENE PHOTO --camera NAME: pose (and more) optimised on the picture
 // Thin: parse, call align/, report. See docs/alignment.md.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -23,6 +24,7 @@
 #include "align/sensitivity.h"
 #include "align/setup_similarity.h"
 #include "apps/cli_checks.h"
+#include "render/scene_yaml.h"
 #include "apps/cli_files.h"
 #include "apps/commands.h"
 #include "render/setup_render.h"
@@ -38,7 +40,7 @@ namespace fs = std::filesystem;
 
 struct AlignOptions {
   std::string scene, camera, output, json, scene_out;
-  std::vector<std::string> photos;
+  std::vector<std::string> photos, camera_photos;
   bool pinhole = false, refine_focal = false, no_reflections = false;
   bool refine_index = false, refine_glass = false, no_fiducials = false;
   std::vector<int> levels = {8, 4, 2, 1};
@@ -127,15 +129,16 @@ void check_files(const AlignOptions& o, const PreparedScene& ps) {
 }
 
 // --- align pose -----------------------------------------------------------------
-void run_pose(const AlignOptions& o) {
-  const PreparedScene ps = prepare_scene(o.scene, o.camera);
-  check_files(o, ps);
+// One camera's pose from its photos: detection, fit, report; its JSON object.
+nlohmann::json pose_one_camera(const AlignOptions& o, const std::string& camera, const std::vector<std::string>& photos,
+                               std::vector<CameraPoseUpdate>* updates) {
+  const PreparedScene ps = prepare_scene(o.scene, camera);
   const std::vector<SceneFiducial> fiducials = scene_fiducials(ps.scene);
   if (fiducials.empty())
     throw InputError(o.scene, "solids", "the scene has no fiducials (rectangles whose texture is a target spec)");
   const CameraModel& model = ps.camera().model;
   std::vector<FiducialCorner> corners;
-  for (const std::string& photo : o.photos) {
+  for (const std::string& photo : photos) {
     cv::Mat gray = read_photo_gray8(photo);
     if (gray.cols != model.width_px() || gray.rows != model.height_px())
       throw InputError(photo, "size", fmt::format("is {}x{} px, camera '{}' is {}x{} px", gray.cols, gray.rows,
@@ -149,7 +152,7 @@ void run_pose(const AlignOptions& o) {
     corners.insert(corners.end(), found.corners.begin(), found.corners.end());
   }
   if (corners.empty())
-    throw InputError(o.photos.front(), "fiducials", "none of the scene's fiducials was found in the photos");
+    throw InputError(photos.front(), "fiducials", "none of the scene's fiducials was found in the photos");
   const std::unique_ptr<SceneIndex> index = make_scene_index(ps.trace);
   AlignPoseOptions options;
   options.through_glass = !o.pinhole;
@@ -195,8 +198,42 @@ void run_pose(const AlignOptions& o) {
   }
   for (const FiducialFit& f : pose.fiducials)
     j["fiducials"].push_back({{"field", f.field}, {"corners", f.corners}, {"rms_px", f.rms_px}, {"max_px", f.max_px}});
+  updates->push_back({ps.camera_index, fit.camera_from_world});
+  return j;
+}
+
+// PHOTO... belong to --camera; each --photo CAM=FILE to its camera (several
+// cameras in one run, each posed from its own photos, all written into one scene).
+void run_pose(const AlignOptions& o) {
+  std::vector<std::pair<std::string, std::vector<std::string>>> per_camera;
+  if (!o.photos.empty()) per_camera.push_back({o.camera, o.photos});
+  for (const std::string& spec : o.camera_photos) {
+    const std::size_t eq = spec.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size())
+      throw InputError("", "--photo", fmt::format("'{}' is not CAMERA=FILE", spec));
+    const std::string name = spec.substr(0, eq), file = spec.substr(eq + 1);
+    if (!fs::is_regular_file(file)) throw InputError(file, "--photo", "does not exist");
+    auto it = std::find_if(per_camera.begin(), per_camera.end(), [&](const auto& p) { return p.first == name; });
+    if (it == per_camera.end()) it = per_camera.insert(per_camera.end(), {name, {}});
+    it->second.push_back(file);
+  }
+  if (per_camera.empty()) throw InputError("", "PHOTO", "give the photos (PHOTO... with --camera, or --photo CAMERA=FILE)");
+  // Every output against the scene's files and every photo, before any work.
+  const Scene scene = read_scene(o.scene);
+  std::vector<std::string> inputs = scene_input_files(scene);
+  for (const auto& [name, files] : per_camera) inputs.insert(inputs.end(), files.begin(), files.end());
+  check_outputs(inputs, outputs_of(o));
+  check_scene_out(o);
+  std::vector<CameraPoseUpdate> updates;
+  nlohmann::json j;
+  for (const auto& [name, files] : per_camera) j["cameras"].push_back(pose_one_camera(o, name, files, &updates));
+  // One camera: its object at the top level (what `align sensitivity --pose-json` reads).
+  if (per_camera.size() == 1) j = j["cameras"][0];
   write_json(o.json, j);
-  write_scene_out(o, ps, fit.camera_from_world);
+  if (!o.scene_out.empty()) {
+    write_file_atomically(o.scene_out, scene_with_camera_poses(o.scene, updates));
+    std::printf("wrote %s (%zu camera poses replaced)\n", o.scene_out.c_str(), updates.size());
+  }
 }
 
 // --- align check ----------------------------------------------------------------
@@ -491,7 +528,11 @@ void register_align_commands(CLI::App& app) {
   CLI::App* pose = align->add_subcommand(
       "pose", "the camera's pose from the scene's fiducials (ArUco, AprilTag, boards) found in its photos; corners "
               "seen through glass are projected through the traced model");
-  add_common(pose, o, true);
+  pose->add_option("SCENE", o.scene, "scene file (docs/scene.md)")->required()->check(CLI::ExistingFile);
+  pose->add_option("PHOTO", o.photos, "photos taken by --camera (8/16-bit TIFF, PNG, ...)")->check(CLI::ExistingFile);
+  pose->add_option("--camera", o.camera, "the scene's camera that took PHOTO... (default: the first)");
+  pose->add_option("--photo", o.camera_photos, "CAMERA=FILE: a photo of another camera (repeat for a rig)");
+  pose->add_option("--json", o.json, "also write the figures as JSON");
   pose->add_option("-o,--scene-out", o.scene_out, "write the scene with the new pose (in the scene's folder)");
   pose->add_flag("--pinhole", o.pinhole, "plain pinhole projection only (ignore the glass between camera and markers)");
   pose->add_flag("--refine-focal", o.refine_focal, "also fit one scale on the focal length");
