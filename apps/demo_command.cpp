@@ -1,5 +1,6 @@
 // glasspiv demo: the embedded example session: the example camera in all four
-// file formats, a calibration session on synthetic photos, and the reactor rendered.
+// file formats, a calibration session on synthetic photos, the reactor rendered,
+// corrected, and aligned on a photograph.
 #include <cstdio>
 #include <filesystem>
 #include <string_view>
@@ -11,6 +12,7 @@
 #include "apps/camera_text.h"
 #include "apps/cli_files.h"
 #include "apps/commands.h"
+#include "apps/demo_alignment.h"
 #include "apps/demo_calibration.h"
 #include "apps/demo_correction.h"
 #include "apps/demo_render.h"
@@ -23,6 +25,9 @@ namespace glasspiv::demo_cameras {
 const std::vector<std::pair<std::string_view, std::string_view>>& embedded_files();
 }
 namespace glasspiv::demo_scenes {
+const std::vector<std::pair<std::string_view, std::string_view>>& embedded_files();
+}
+namespace glasspiv::demo_scene_markers {
 const std::vector<std::pair<std::string_view, std::string_view>>& embedded_files();
 }
 namespace glasspiv::demo_targets {
@@ -41,6 +46,53 @@ std::pair<double, double> pose_difference(const Camera& a, const Camera& b) {
   if (!a.camera_from_world || !b.camera_from_world) return {0.0, 0.0};
   const RigidTransform d = *a.camera_from_world * b.camera_from_world->inverse();
   return {Eigen::AngleAxisd(d.rotation).angle(), d.translation_mm.norm()};
+}
+
+// 7. Alignment: the model placed on a photograph of the setup.
+void run_alignment_step(const fs::path& out, const fs::path& scenes_dir, int binning) {
+  std::printf("\n7. Alignment: a photograph of the reactor with 14 ArUco markers on its frame and a ChArUco board behind "
+              "the packing (scenes/reactor_markers.yaml), the model placed on it:\n");
+  const DemoAlignmentSummary al =
+      run_alignment_demo((out / "align").string(), (scenes_dir / "reactor_markers.yaml").string(), binning);
+  std::printf("   %-40s the photograph (%dx%d, blur, vignette, 0.5 grey levels of noise), rendered in %.1f s\n",
+              al.photo_png.c_str(), al.width, al.height, al.photo_seconds);
+  std::printf("   found %d of %d markers and %d of the rear board's %d corners%s\n", al.markers_found, al.markers,
+              al.board_corners, al.board_corner_ids,
+              al.board_corners ? "" : " (seen only through the spheres, in pieces: it aligns by the picture alone)");
+  std::printf("   pose from the fiducials, traced through the glass: %.4f mm, %.5f deg from the truth (RMS %.3f px, %d "
+              "corners, %d outliers; 1-sigma %.3f mm, %.4f deg)\n",
+              al.pose_error.position_mm, al.pose_error.rotation_deg, al.pose_rms_px, al.pose_inliers, al.pose_outliers,
+              al.position_sigma_mm.norm(), al.rotation_sigma_deg);
+  if (al.glass_displacement_px < 0.01)
+    std::printf("   the plain pinhole fit: %.4f mm, %.5f deg, the same: no corner found is seen through glass\n",
+                al.pinhole_error.position_mm, al.pinhole_error.rotation_deg);
+  else
+    std::printf("   the plain pinhole fit: %.4f mm, %.5f deg (RMS %.3f px); the glass displaces corners by up to %.1f px\n",
+                al.pinhole_error.position_mm, al.pinhole_error.rotation_deg, al.pinhole_rms_px,
+                al.glass_displacement_px);
+  std::printf("   refinement on the picture and the corners from a start off by %.2f mm, %.2f deg:\n",
+              al.start_error.position_mm, al.start_error.rotation_deg);
+  for (const RefineLevel& l : al.levels)
+    std::printf("     binning %d more (%dx%d): gradient NCC %.4f -> %.4f, corners %.3f px, in %d steps, %d renders, %.1f s\n",
+                l.binning, l.width_px, l.height_px, l.gradient_ncc_before, l.gradient_ncc_after, l.corner_rms_px_after,
+                l.iterations, l.renders, l.seconds);
+  std::printf("   refined: %.4f mm, %.5f deg from the truth; at %dx%d gradient NCC %.4f -> %.4f (the truth's %.4f), edge "
+              "distance %.2f -> %.3f px\n",
+              al.refined_error.position_mm, al.refined_error.rotation_deg, al.width, al.height, al.gradient_ncc_before,
+              al.gradient_ncc_after, al.gradient_ncc_truth, al.edge_distance_before_px, al.edge_distance_after_px);
+  std::printf("   %-40s overlay of the start (photo green, render magenta); also %s\n", al.overlay_before_png.c_str(),
+              fs::path(al.overlay_before_edges_png).filename().c_str());
+  std::printf("   %-40s overlay after the refinement; also %s\n", al.overlay_after_png.c_str(),
+              fs::path(al.overlay_after_edges_png).filename().c_str());
+  std::printf("   sensitivity (first order, every %d px, the marker pose's covariance; %.2f s):\n",
+              al.sensitivity_step_px, al.sensitivity_seconds);
+  std::printf("     %-26s %10s %10s %10s %10s\n", "parameter (1-sigma)", "median px", "95% px", "median mm", "95% mm");
+  for (const DemoSensitivityRow& r : al.sensitivity)
+    std::printf("     %-26s %10.4g %10.4g %10.4g %10.4g\n",
+                (r.sigma > 0 ? fmt::format("{} ({:g})", r.name, r.sigma) : r.name).c_str(), r.median_px, r.p95_px,
+                r.median_mm, r.p95_mm);
+  std::printf("   %-40s the sheet point each pixel sees: how far it moves, mm\n", al.sensitivity_png.c_str());
+  std::printf("   report: %s (%.1f s for this step)\n", al.html.c_str(), al.seconds);
 }
 
 void run_demo(const std::string& out_dir) {
@@ -143,6 +195,8 @@ void run_demo(const std::string& out_dir) {
   const fs::path scenes_dir = out / "scenes";
   for (const auto& [name, contents] : demo_scenes::embedded_files())
     write_file_atomically((scenes_dir / std::string(name)).string(), contents);
+  for (const auto& [name, contents] : demo_scene_markers::embedded_files())
+    write_file_atomically((scenes_dir / "markers" / std::string(name)).string(), contents);
   const DemoRenderSummary render =
       run_render_demo((out / "render").string(), (scenes_dir / "reactor.yaml").string(), kBinning);
   std::printf("   transport map %dx%d %s in %.2f s (%.2f sheet crossings per pixel; %.0f%% of the rays met no "
@@ -175,8 +229,12 @@ void run_demo(const std::string& out_dir) {
               "the ghosts of reflections removed\n", corr.accumulation_rms, corr.lsq_rms, corr.lsq_iterations);
   std::printf("   %-40s truth | accumulation | least squares | mask (sheet grid)\n", corr.five_png.c_str());
 
+
+  // 7. Alignment: the model placed on a photograph of the setup.
+  run_alignment_step(out, scenes_dir, kBinning);
+
   std::printf("\nNext: `glasspiv camera --help`, `glasspiv calib --help`, `glasspiv target --help`, "
-              "`glasspiv render --help`, `glasspiv correct --help`, `glasspiv coverage --help`.\n");
+              "`glasspiv render --help`, `glasspiv correct --help`, `glasspiv coverage --help`, `glasspiv align --help`.\n");
 }
 
 }  // namespace
