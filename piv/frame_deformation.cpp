@@ -113,6 +113,16 @@ void bspline5_weights(double t, double w[6]) {
 
 }  // namespace
 
+const char* deform_interpolation_name(DeformInterpolation interpolation) {
+  switch (interpolation) {
+    case DeformInterpolation::bilinear: return "bilinear";
+    case DeformInterpolation::bicubic: return "bicubic";
+    case DeformInterpolation::bspline3: return "bspline3";
+    case DeformInterpolation::bspline5: return "bspline5";
+  }
+  return "?";
+}
+
 double grid_field_at(const InterrogationGrid& grid, const std::vector<double>& field, double x_px, double y_px) {
   int c0, r0;
   double fx, fy;

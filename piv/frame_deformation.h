@@ -27,6 +27,9 @@ enum class DeformInterpolation {
   bspline5,  // 6 x 6 taps on quintic B-spline coefficients, likewise
 };
 
+// "bilinear", "bicubic", "bspline3", "bspline5" (the command line's names).
+const char* deform_interpolation_name(DeformInterpolation interpolation);
+
 // Bilinear interpolation of a grid field (row-major over grid, finite) at a
 // point in px; beyond the outermost window centres the outermost cells are
 // extended linearly (the border windows of a gradient need it; it reaches at
