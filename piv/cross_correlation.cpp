@@ -20,25 +20,34 @@ double WindowCorrelator::load(const float* src, int stride, const std::uint8_t* 
   int count = 0;
   for (int y = 0; y < n; ++y) {
     const float* s = src + static_cast<std::ptrdiff_t>(y) * stride;
-    const std::uint8_t* v = valid ? valid + static_cast<std::ptrdiff_t>(y) * stride : nullptr;
-    for (int x = 0; x < n; ++x)
-      if (!v || v[x]) {
-        sum += s[x];
-        ++count;
+    float row = 0;  // float per row, double across rows: exact enough, and vectorised
+    if (valid) {
+      const std::uint8_t* v = valid + static_cast<std::ptrdiff_t>(y) * stride;
+      for (int x = 0; x < n; ++x) {
+        row += v[x] ? s[x] : 0.0f;
+        count += v[x] != 0;
       }
+    } else {
+      for (int x = 0; x < n; ++x) row += s[x];
+      count += n;
+    }
+    sum += row;
   }
   if (count < 8) return -1;
   const float mean = static_cast<float>(sum / count);
   double energy = 0;
   for (int y = 0; y < n; ++y) {
     const float* s = src + static_cast<std::ptrdiff_t>(y) * stride;
-    const std::uint8_t* v = valid ? valid + static_cast<std::ptrdiff_t>(y) * stride : nullptr;
     float* d = dst.ptr<float>(y);
-    for (int x = 0; x < n; ++x) {
-      const float value = (!v || v[x]) ? s[x] - mean : 0.0f;
-      d[x] = value;
-      energy += static_cast<double>(value) * value;
+    float row = 0;
+    if (valid) {
+      const std::uint8_t* v = valid + static_cast<std::ptrdiff_t>(y) * stride;
+      for (int x = 0; x < n; ++x) d[x] = v[x] ? s[x] - mean : 0.0f;
+    } else {
+      for (int x = 0; x < n; ++x) d[x] = s[x] - mean;
     }
+    for (int x = 0; x < n; ++x) row += d[x] * d[x];
+    energy += row;
   }
   // A uniform window subtracts to exact zeros: no correlation is defined.
   return energy > 1e-20 * count ? energy : -1;

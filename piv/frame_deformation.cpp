@@ -93,22 +93,18 @@ cv::Mat bspline_coefficients(const cv::Mat& frame, int degree, int threads) {
   return out;
 }
 
-// The quintic B-spline beta5(x).
-double bspline5(double x) {
-  x = std::abs(x);
-  const double x2 = x * x, x4 = x2 * x2;
-  if (x < 1) return 11.0 / 20 - x2 / 2 + x4 / 4 - x4 * x / 12;
-  if (x < 2) return 17.0 / 40 + 5 * x / 8 - 7 * x2 / 4 + 5 * x2 * x / 4 - 3 * x4 / 8 + x4 * x / 24;
-  if (x < 3) {
-    const double s = 3 - x;
-    return s * s * s * s * s / 120;
-  }
-  return 0;
-}
-
-// Quintic B-spline weights for taps -2 .. 3 at fraction t.
+// Quintic B-spline weights for taps -2 .. 3 at fraction t: beta5(t - k), the
+// pieces of beta5 written as polynomials in t (they sum to 1).
 void bspline5_weights(double t, double w[6]) {
-  for (int k = 0; k < 6; ++k) w[k] = bspline5(t - (k - 2));
+  const double s = 1 - t;
+  const double t2 = t * t, t3 = t2 * t, t4 = t3 * t, t5 = t4 * t;
+  const double s2 = s * s, s3 = s2 * s, s4 = s3 * s, s5 = s4 * s;
+  w[0] = s5 / 120;
+  w[1] = (1 + 5 * s + 10 * s2 + 10 * s3 + 5 * s4 - 5 * s5) / 120;
+  w[2] = (66 - 60 * t2 + 30 * t4 - 10 * t5) / 120;
+  w[3] = (66 - 60 * s2 + 30 * s4 - 10 * s5) / 120;
+  w[4] = (1 + 5 * t + 10 * t2 + 10 * t3 + 5 * t4 - 5 * t5) / 120;
+  w[5] = t5 / 120;
 }
 
 }  // namespace
@@ -197,21 +193,21 @@ DeformedFrame deform_frame(const cv::Mat& frame, const cv::Mat& usable, const cv
         wx[0] = 1 - (sx - x0), wx[1] = sx - x0;
         wy[0] = 1 - (sy - y0), wy[1] = sy - y0;
       }
+      int xi[6];
+      for (int i = 0; i < taps; ++i) xi[i] = mirrored(x0 + first_tap + i, w);
       double sum = 0;
       bool good = true;
       for (int j = 0; j < taps; ++j) {
         if (wy[j] == 0) continue;
         const int yy = mirrored(y0 + first_tap + j, h);
         const float* src = source.ptr<float>(yy);
-        const std::uint8_t* m = usable.empty() ? nullptr : usable.ptr<std::uint8_t>(yy);
         double row = 0;
-        for (int i = 0; i < taps; ++i) {
-          if (wx[i] == 0) continue;
-          const int xx = mirrored(x0 + first_tap + i, w);
-          if (m && !m[xx]) good = false;
-          row += wx[i] * src[xx];
-        }
+        for (int i = 0; i < taps; ++i) row += wx[i] * src[xi[i]];
         sum += wy[j] * row;
+        if (!usable.empty()) {
+          const std::uint8_t* m = usable.ptr<std::uint8_t>(yy);
+          for (int i = 0; i < taps; ++i) good &= wx[i] == 0 || m[xi[i]] != 0;
+        }
       }
       o[x] = good ? static_cast<float>(sum) : 0.0f;
       ok[x] = good ? 1 : 0;

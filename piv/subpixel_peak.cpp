@@ -24,9 +24,12 @@ double gaussian_peak_offset_px(double left, double centre, double right) {
 CorrelationPeak find_correlation_peak(const float* plane, int plane_px, int exclusion_radius_px) {
   const int m = plane_px;
   int best = 0;
-  float lowest = plane[0];
+  float lowest = plane[0], highest_seen = plane[0];
   for (int i = 1; i < m * m; ++i) {
-    if (plane[i] > plane[best]) best = i;
+    if (plane[i] > highest_seen) {
+      highest_seen = plane[i];
+      best = i;
+    }
     lowest = std::min(lowest, plane[i]);
   }
   CorrelationPeak peak;
@@ -34,14 +37,22 @@ CorrelationPeak find_correlation_peak(const float* plane, int plane_px, int excl
   if (!(highest > lowest)) return peak;
   const int r = best / m, c = best % m;
   auto at = [&](int row, int col) -> double { return plane[((row + m) % m) * m + (col + m) % m]; };
-  // The second peak: the highest sample outside the exclusion square (wrapped distances).
+  // The second peak: the highest sample outside the exclusion square around
+  // (r, c), wrapped: rows of the band skip its columns, other rows are whole.
+  const int e = exclusion_radius_px;
   float second = lowest;
+  auto in_band = [&](int k, int centre) {
+    const int d = std::abs(k - centre);
+    return std::min(d, m - d) <= e;
+  };
   for (int row = 0; row < m; ++row) {
-    const int dr = std::abs(row - r), wr = std::min(dr, m - dr);
-    for (int col = 0; col < m; ++col) {
-      const int dc = std::abs(col - c), wc = std::min(dc, m - dc);
-      if (wr > exclusion_radius_px || wc > exclusion_radius_px) second = std::max(second, plane[row * m + col]);
+    const float* p = plane + row * m;
+    if (!in_band(row, r)) {
+      for (int col = 0; col < m; ++col) second = std::max(second, p[col]);
+      continue;
     }
+    if (2 * e + 1 >= m) continue;  // the band covers every column
+    for (int k = e + 1; k < m - e; ++k) second = std::max(second, p[(c + k) % m]);
   }
   peak.found = true;
   peak.height = highest;
