@@ -1,5 +1,6 @@
 #include "align/align_refine.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -60,6 +61,12 @@ cv::Mat feature_of(const cv::Mat& image, double blur_px, bool intensity) {
   return out;
 }
 
+// Samples per pixel and axis at binning b: as asked, or (0) as many as make a
+// binned pixel average its area like the binned photo does, at most 4.
+int level_samples(const RefineOptions& options, int b) {
+  return options.samples_per_axis > 0 ? options.samples_per_axis : std::clamp(b, 1, 4);
+}
+
 // One level of the pyramid: the binned photo's features and what renders it.
 class LevelProblem : public ceres::CostFunction {
  public:
@@ -69,7 +76,7 @@ class LevelProblem : public ceres::CostFunction {
                const std::vector<RefineCorner>& corners, int* renders)
       : scene_(scene), index_(index), look_(look), camera_(camera), start_(start), photo_(photo_features),
         valid_(valid), layout_(layout), options_(options), intensity_(intensity), binning_(binning),
-        corners_(corners), renders_(renders) {
+        corners_(corners), renders_(renders), samples_(level_samples(options, binning)) {
     for (int r = 0; r < valid.rows; ++r)
       for (int c = 0; c < valid.cols; ++c)
         if (valid.at<unsigned char>(r, c)) pixels_.push_back(r * valid.cols + c);
@@ -107,7 +114,7 @@ class LevelProblem : public ceres::CostFunction {
     }
     const CameraModel model = m.focal_scale == 1 ? camera_ : scaled_focal(camera_, m.focal_scale);
     std::vector<float> radiance = render_setup(*scene, *index, look_, model, m.camera_from_world,
-                                                          options_.trace, options_.samples_per_axis, options_.threads);
+                                                          options_.trace, samples_, options_.threads);
     ++*renders_;
     cv::Mat render(camera_.height_px(), camera_.width_px(), CV_32F, radiance.data());
     const cv::Mat features = normalised(feature_of(render, options_.blur_px, intensity_), valid_);
@@ -191,6 +198,7 @@ class LevelProblem : public ceres::CostFunction {
   int binning_;
   const std::vector<RefineCorner>& corners_;
   int* renders_;
+  int samples_;
   double picture_weight_ = 1;
   mutable int lost_ = 0;
   std::vector<int> pixels_;
@@ -245,7 +253,7 @@ RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, co
       const Model m = model_of(q.data(), layout, start_camera_from_world);
       const TraceScene adjusted = adjusted_glass(scene, m.index_offset, m.glass_offset_mm);
       std::vector<float> radiance = render_setup(adjusted, look, scaled_focal(level_camera, m.focal_scale),
-                                                 m.camera_from_world, options.trace, options.samples_per_axis,
+                                                 m.camera_from_world, options.trace, level_samples(options, b),
                                                  options.threads);
       return photo_model.compare(cv::Mat(level_camera.height_px(), level_camera.width_px(), CV_32F, radiance.data()))
           .gradient_ncc;

@@ -47,7 +47,12 @@ struct RefineParameters {
 struct RefineOptions {
   std::vector<int> binning_levels = {8, 4, 2, 1};  // coarse to fine; each >= 1
   double blur_px = 1.5;           // Gaussian sigma in binned pixels, every level
-  int samples_per_axis = 1;       // per pixel and axis in the renders
+  // Per pixel and axis in the renders; 0: min(binning, 4), so that a binned
+  // pixel averages its area as the binned photo does (a point sample per
+  // binned pixel aliases fine structure such as the images behind spheres).
+  // On the marker-frame test auto took 0.048 -> 0.006 mm with corners, left
+  // the picture alone at 0.07 mm, and cost 10x the time: 1 is the default.
+  int samples_per_axis = 1;
   int max_iterations = 20;        // Levenberg-Marquardt steps per level
   // Levels binned this much or more compare the blurred intensities (a wide
   // basin of attraction for a far start), the finer ones the gradients.

@@ -12,12 +12,15 @@
 #include "render/setup_render.h"
 #include "sim/marker_setup.h"
 #include "sim/setup_photo.h"
+#include "tests/sanitized_build.h"
 #include "tests/temp_dir.h"
 
 namespace glasspiv {
 namespace {
 
 TEST(AlignRefine, AStartOffByTwoMillimetresAndOneDegreeReturnsToTheTruth) {
+  // Some 700 renders: hours under the sanitizers; the next test runs the same code there.
+  if (kSanitizedBuild) GTEST_SKIP() << "too slow under the sanitizers (tests/sanitized_build.h)";
   TempDir dir("align_refine");
   MarkerSetupOptions setup;
   setup.width_px = 640;
@@ -30,7 +33,7 @@ TEST(AlignRefine, AStartOffByTwoMillimetresAndOneDegreeReturnsToTheTruth) {
   look.textures = ps.textures_by_solid();
   const CameraModel& model = ps.camera().model;
   const RigidTransform truth = *ps.camera().camera_from_world;
-  const std::vector<float> radiance = render_setup(ps.trace, look, model, truth, TraceOptions{}, 3, 0);
+  const std::vector<float> radiance = render_setup(ps.trace, look, model, truth, TraceOptions{}, kSanitizedBuild ? 1 : 3, 0);
   const cv::Mat photo8 = photo_from_radiance(radiance, model.width_px(), model.height_px(), PhotoLook{});
   cv::Mat photo;
   photo8.convertTo(photo, CV_32F, 1.0 / 255);
@@ -68,7 +71,7 @@ TEST(AlignRefine, WithTheFiducialCornersTheStartReturnsWithinFiftyMicrons) {
   look.textures = ps.textures_by_solid();
   const CameraModel& model = ps.camera().model;
   const RigidTransform truth = *ps.camera().camera_from_world;
-  const std::vector<float> radiance = render_setup(ps.trace, look, model, truth, TraceOptions{}, 3, 0);
+  const std::vector<float> radiance = render_setup(ps.trace, look, model, truth, TraceOptions{}, kSanitizedBuild ? 1 : 3, 0);
   const cv::Mat photo8 = photo_from_radiance(radiance, model.width_px(), model.height_px(), PhotoLook{});
   cv::Mat photo;
   photo8.convertTo(photo, CV_32F, 1.0 / 255);
@@ -83,6 +86,7 @@ TEST(AlignRefine, WithTheFiducialCornersTheStartReturnsWithinFiftyMicrons) {
       Eigen::Vector3d(0.6, -0.7, 0.4).normalized() * (M_PI / 180), Eigen::Vector3d(1.2, 0.9, -1.3).normalized() * 2);
   RefineOptions options;
   options.binning_levels = {16, 8, 4, 2};  // the corners pin the pose: full resolution adds little here
+  if (kSanitizedBuild) options.binning_levels = {16};  // the same code on one coarse level
   const RefineResult r = refine_alignment(ps.trace, look, model, delta * truth, photo, {}, options, corners);
   const Eigen::AngleAxisd d(r.camera_from_world.rotation * truth.rotation.transpose());
   const double position_mm = (r.camera_from_world.inverse().translation_mm - truth.inverse().translation_mm).norm();
@@ -92,8 +96,8 @@ TEST(AlignRefine, WithTheFiducialCornersTheStartReturnsWithinFiftyMicrons) {
                 l.gradient_ncc_before, l.gradient_ncc_after, l.corner_rms_px_after, l.renders, l.seconds);
   std::printf("refined with corners behind a 10 mm window: %.4f mm, %.5f deg from the truth (%.1f s)\n", position_mm,
               rotation_deg, r.seconds);
-  EXPECT_LT(position_mm, 0.05);
-  EXPECT_LT(rotation_deg, 0.01);
+  EXPECT_LT(position_mm, kSanitizedBuild ? 0.5 : 0.05);
+  EXPECT_LT(rotation_deg, kSanitizedBuild ? 0.05 : 0.01);
   EXPECT_EQ(r.levels.back().corners_lost, 0);
 }
 
