@@ -8,6 +8,7 @@
 #include <apriltag/apriltag.h>
 #include <fmt/format.h>
 #include <opencv2/aruco.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "targets/target_spec.h"
 #include "util/input_error.h"
@@ -166,6 +167,26 @@ bool refine_corners(const cv::Mat& gray, int cells, std::array<Eigen::Vector2d, 
   return true;
 }
 
+// The corners of a marker the edge fit gave up on: cornerSubPix in a window
+// of 0.4 cells (1 to 5 px half-width), small enough to stay off the inner
+// bits; false if a corner moves by more than half a cell (not a corner there).
+bool corner_subpix_fallback(const cv::Mat& gray, int cells, std::array<Eigen::Vector2d, 4>& corners) {
+  double side_px = 0;
+  for (std::size_t k = 0; k < 4; ++k) side_px += (corners[(k + 1) % 4] - corners[k]).norm();
+  const double cell_px = side_px / 4 / cells;
+  const int half = std::clamp(static_cast<int>(std::lround(0.4 * cell_px)), 1, 5);
+  std::vector<cv::Point2f> points;
+  for (const Eigen::Vector2d& c : corners) points.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
+  cv::cornerSubPix(gray, points, cv::Size(half, half), cv::Size(-1, -1),
+                   cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 1e-3));
+  for (std::size_t k = 0; k < 4; ++k) {
+    const Eigen::Vector2d moved(points[k].x, points[k].y);
+    if (!((moved - corners[k]).norm() <= 0.5 * cell_px)) return false;
+    corners[k] = moved;
+  }
+  return true;
+}
+
 struct Candidate {
   int id;
   std::array<Eigen::Vector2d, 4> corners_px;
@@ -276,7 +297,11 @@ MarkerDetection MarkerDetector::detect(const cv::Mat& gray8, const std::string& 
     DetectedMarker m;
     m.id = c.id;
     m.corners_px = c.corners_px;
-    if (refine_corners(gray8, impl_->cells, m.corners_px)) result.markers.push_back(m);
+    if (!refine_corners(gray8, impl_->cells, m.corners_px)) {
+      m.edge_fit = false;
+      if (!corner_subpix_fallback(gray8, impl_->cells, m.corners_px)) continue;
+    }
+    result.markers.push_back(m);
   }
   std::sort(result.markers.begin(), result.markers.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
   return result;

@@ -23,6 +23,10 @@ struct DetectedMarker {
   // board_corners() ids 0..3 of its aruco_marker / apriltag target; glasspiv
   // pixel convention.
   std::array<Eigen::Vector2d, 4> corners_px;
+  // false: the edge fit gave up (cells of a few px, a blurred or cut border) and
+  // the corners are OpenCV's, refined by cv::cornerSubPix in a window of 0.4
+  // cells (less exact: the pose's outlier rounds judge them).
+  bool edge_fit = true;
 };
 
 struct MarkerDetection {
