@@ -9,7 +9,7 @@ packages=(
   libceres-dev libmrcal-dev python3-mrcal python3-numpy
   libyaml-cpp-dev libcli11-dev libfmt-dev nlohmann-json3-dev libpugixml-dev
   libgtest-dev libgmock-dev libtbb-dev
-  libembree-dev libopenimageio-dev libassimp-dev
+  libembree-dev libopenimageio-dev libassimp-dev libvtk9-dev
 )
 
 missing=()
