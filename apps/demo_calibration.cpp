@@ -12,6 +12,7 @@
 #include "calib/fit/calibration_diagnostics.h"
 #include "calib/io/camera_file.h"
 #include "calib/lens_maps.h"
+#include "sim/calibration_views.h"
 #include "sim/target_photo.h"
 #include "targets/observations_io.h"
 #include "targets/target_image.h"

@@ -40,7 +40,8 @@
 #include "calib/lens_maps.h"
 #include "mrcal_peer.h"
 #include "opencv_peer.h"
-#include "synthetic_views.h"
+#include "sim/calibration_views.h"
+#include "truth_cameras.h"
 
 namespace {
 
@@ -72,10 +73,10 @@ struct Row {
 
 void bench_lens(const Lens& lens, int runs) {
   const LensModel model = lens.truth.lens_model();
-  testing::SyntheticBoard board;
+  SyntheticBoard board;
   std::mt19937 rng(2);
-  const std::vector<RigidTransform> poses = testing::plan_views(lens.truth, board, {}, rng);
-  Observations obs = testing::observe(lens.truth, board, poses, 0.1, rng);
+  const std::vector<RigidTransform> poses = plan_views(lens.truth, board, {}, rng);
+  Observations obs = observe_board(lens.truth, board, poses, 0.1, rng);
   for (ViewObservations& v : obs.views)
     for (CornerObservation& c : v.corners)
       c.pixel_px = Eigen::Vector2d(static_cast<float>(c.pixel_px.x()), static_cast<float>(c.pixel_px.y()));

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
+#include <stdexcept>
 
 #include <opencv2/imgproc.hpp>
 
@@ -85,40 +87,65 @@ cv::Mat render_target_photo(const CameraModel& camera, const RigidTransform& cam
   return photo;
 }
 
-std::vector<RigidTransform> calibration_view_poses(const CameraModel& camera, const Eigen::Vector2d& board_size_mm,
-                                                   int views, double near_mm, double far_mm, double max_tilt_deg,
-                                                   std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const auto uniform = [&](double a, double b) { return a + (b - a) * unit(rng); };
-  const double deg = M_PI / 180.0;
-  std::vector<RigidTransform> poses;
-  for (int v = 0; v < views; ++v) {
-    // Visit the 3x3 regions of the image in turn, the centre first; the board
-    // centre stays far enough from the edges that at least about three quarters
-    // of the board is seen, so the corners of the sensor get corners too.
-    static const int order[9] = {4, 0, 8, 2, 6, 1, 7, 3, 5};
-    const int region = order[v % 9];
-    const double distance = uniform(near_mm, far_mm);
-    const double half_w = std::min(0.45 * camera.width_px(), 0.25 * camera.fx_px() * board_size_mm.x() / distance);
-    const double half_h = std::min(0.45 * camera.height_px(), 0.25 * camera.fy_px() * board_size_mm.y() / distance);
-    const double u = half_w + (region % 3 + uniform(0.3, 0.7)) / 3.0 * (camera.width_px() - 1 - 2 * half_w);
-    const double w = half_h + (region / 3 + uniform(0.3, 0.7)) / 3.0 * (camera.height_px() - 1 - 2 * half_h);
-    const UnprojectResult ray = camera.unproject({u, w});
-    const Eigen::Vector3d direction = ray.ok() ? ray.ray_camera : Eigen::Vector3d::UnitZ();
-    // Tilt alternates in sign so the set is never close to fronto-parallel.
-    const double tilt_x = (v % 2 ? 1 : -1) * uniform(0.4, 1.0) * max_tilt_deg * deg;
-    const double tilt_y = (v % 4 < 2 ? 1 : -1) * uniform(0.4, 1.0) * max_tilt_deg * deg;
-    const double roll = uniform(-20, 20) * deg;
-    RigidTransform pose;
-    pose.rotation = (Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(tilt_y, Eigen::Vector3d::UnitY()) *
-                     Eigen::AngleAxisd(tilt_x, Eigen::Vector3d::UnitX()))
-                        .toRotationMatrix();
-    const Eigen::Vector3d centre_board(board_size_mm.x() / 2, board_size_mm.y() / 2, 0);
-    pose.translation_mm = direction * distance - pose.rotation * centre_board;
-    poses.push_back(pose);
-  }
-  return poses;
+Eigen::Vector2d PinholeTargetPhoto::project(const Eigen::Vector3d& board_mm) const {
+  const Eigen::Vector3d p = photo_from_board * Eigen::Vector3d(board_mm.x(), board_mm.y(), 1.0);
+  return p.head<2>() / p.z();
+}
+
+PinholeTargetPhoto render_pinhole_target_photo(const CameraModel& pinhole, const RigidTransform& camera_from_board,
+                                               const TargetSpec& spec, const PinholePhotoOptions& options) {
+  if (pinhole.lens_model() != LensModel::Pinhole)
+    throw std::invalid_argument("render_pinhole_target_photo: the camera has a distortion model");
+  PinholeTargetPhoto photo;
+  // photo_from_board = K [r1 r2 t]: the plane z = 0 seen by a pinhole.
+  Eigen::Matrix3d k;
+  k << pinhole.fx_px(), 0, pinhole.cx_px(), 0, pinhole.fy_px(), pinhole.cy_px(), 0, 0, 1;
+  Eigen::Matrix3d rt;
+  rt.col(0) = camera_from_board.rotation.col(0);
+  rt.col(1) = camera_from_board.rotation.col(1);
+  rt.col(2) = camera_from_board.translation_mm;
+  photo.photo_from_board = k * rt;
+
+  // Render at about the supersampled photo's scale where the board is nearest.
+  const Eigen::Vector2d size = board_size_mm(spec);
+  const double focal_px = std::max(pinhole.fx_px(), pinhole.fy_px());
+  double scale = 0;  // photo px per board mm, largest over the board's corners
+  for (const double x : {0.0, size.x()})
+    for (const double y : {0.0, size.y()}) {
+      const Eigen::Vector3d p = rt * Eigen::Vector3d(x, y, 1);
+      scale = std::max(scale, focal_px / p.z());
+    }
+  const int n = options.supersample;
+  const double margin = default_margin_mm(spec);
+  const TargetRender render = render_target(spec, scale * n * 1.25, margin);
+
+  // hi-res pixel X = n x + (n - 1) / 2 for photo pixel x (INTER_AREA's n x n box).
+  Eigen::Matrix3d hi_from_photo;
+  hi_from_photo << n, 0, (n - 1) / 2.0, 0, n, (n - 1) / 2.0, 0, 0, 1;
+  Eigen::Matrix3d board_from_render;  // board = (px + 0.5) / ppmm - margin
+  board_from_render << 1 / render.px_per_mm, 0, 0.5 / render.px_per_mm - margin, 0, 1 / render.px_per_mm,
+      0.5 / render.px_per_mm - margin, 0, 0, 1;
+  const Eigen::Matrix3d hi_from_render = hi_from_photo * photo.photo_from_board * board_from_render;
+  cv::Mat m(3, 3, CV_64F);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) m.at<double>(i, j) = hi_from_render(i, j);
+  const int w = pinhole.width_px(), h = pinhole.height_px();
+  cv::Mat hi;
+  cv::warpPerspective(render.image, hi, m, cv::Size(w * n, h * n), cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+                      cv::Scalar(options.background));
+  cv::Mat low;
+  cv::resize(hi, low, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+  cv::Mat f;
+  low.convertTo(f, CV_32F);
+  if (options.blur_sigma_px > 0) cv::GaussianBlur(f, f, cv::Size(0, 0), options.blur_sigma_px);
+  // Paper is not perfectly white nor ink perfectly black: 255 -> 235, 0 -> 25.
+  f = f * (210.0 / 255.0) + 25.0;
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<float> noise(0.0f, static_cast<float>(options.noise_sigma));
+  for (int y = 0; y < f.rows; ++y)
+    for (float* p = f.ptr<float>(y); p != f.ptr<float>(y) + f.cols; ++p) *p += noise(rng);
+  f.convertTo(photo.image, CV_8U);  // rounds and saturates
+  return photo;
 }
 
 }  // namespace glasspiv

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "sim/calibration_views.h"
 #include "targets/target_detect.h"
 
 namespace glasspiv {

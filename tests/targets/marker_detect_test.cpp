@@ -3,7 +3,7 @@
 // perspective, every marker found, its corners' error against the exact
 // homography; duplicated ids, unknown dictionaries, nothing to find.
 //
-// The photo is made as synthetic_photo.h makes a target's: the plate rendered
+// The photo is made as sim/target_photo.h makes a target's: the plate rendered
 // by exact area sampling (render_target() per marker), warped by the camera's
 // homography at 3x, area-averaged to photo pixels, blurred by a symmetric
 // 0.7 px Gaussian, ink and paper at 25 and 235 grey levels, 0.5 grey levels of

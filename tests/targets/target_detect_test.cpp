@@ -1,6 +1,6 @@
-// Detectors on synthetic photos with known truth (synthetic_photo.h): each
-// detector's pixel convention and accuracy, orientation and ids, the two
-// ChArUco layouts, and what "not found" looks like.
+// Detectors on synthetic photos with known truth (render_pinhole_target_photo,
+// sim/target_photo.h): each detector's pixel convention and accuracy,
+// orientation and ids, the two ChArUco layouts, and what "not found" looks like.
 //
 // Tolerances. A corner's truth is the board point mapped by the exact
 // homography of the synthetic camera; the photos are area-sampled, blurred by a
@@ -17,9 +17,10 @@
 #include <opencv2/aruco/charuco.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "sim/calibration_views.h"
+#include "sim/target_photo.h"
 #include "targets/target_detect.h"
 #include "targets/target_image.h"
-#include "tests/targets/synthetic_photo.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
@@ -68,11 +69,21 @@ const Pose kPoses[] = {{0.12, -0.08, 0.04, {0.3, -0.2}},
                        {0.3, 0.5, -0.6, {15.1, -12.3}},
                        {0.2, -0.3, 3.3, {5.25, 3.75}}};
 
-testing::SyntheticPhoto photo_of(const TargetSpec& spec, const Pose& p, std::uint64_t seed,
-                                 double distance_mm = 420) {
-  testing::PhotoSetup setup = testing::centred_setup(spec, distance_mm, p.tilt_x, p.tilt_y, p.roll, p.offset_px);
-  setup.seed = seed;
-  return testing::synthesise_photo(spec, setup);
+// The photos' pinhole camera: 1280 x 960 px, f = 1400 px, the principal point
+// at the image centre.
+CameraModel photo_camera() { return CameraModel(1280, 960, 1400, 1400, 639.5, 479.5); }
+
+// The board's centre `distance_mm` deep, seen at the image centre plus `p.offset_px`.
+PinholeTargetPhoto photo_of(const TargetSpec& spec, const Pose& p, std::uint64_t seed, double distance_mm = 420,
+                            int supersample = 4) {
+  const CameraModel camera = photo_camera();
+  const Eigen::Vector3d centre_camera_mm(p.offset_px.x() * distance_mm / camera.fx_px(),
+                                         p.offset_px.y() * distance_mm / camera.fy_px(), distance_mm);
+  PinholePhotoOptions options;
+  options.seed = seed;
+  options.supersample = supersample;
+  return render_pinhole_target_photo(
+      camera, board_pose_facing(centre_camera_mm, board_size_mm(spec), p.tilt_x, p.tilt_y, p.roll), spec, options);
 }
 
 struct Accuracy {
@@ -90,7 +101,7 @@ Accuracy accuracy(const TargetSpec& spec, DetectOptions options = {}, double shi
   double squares = 0;
   std::uint64_t seed = 1;
   for (const Pose& p : kPoses) {
-    const testing::SyntheticPhoto photo = photo_of(spec, p, seed++, distance_mm);
+    const PinholeTargetPhoto photo = photo_of(spec, p, seed++, distance_mm);
     const DetectionResult r = detector.detect(photo.image, "synthetic");
     a.expected += static_cast<int>(board_corner_count(spec));
     EXPECT_TRUE(r.note.empty()) << r.note;
@@ -152,7 +163,7 @@ TEST(DetectorAccuracy, OpenCvCharucoCornersAreHalfAPixelOff) {
   int n = 0;
   std::uint64_t seed = 1;
   for (const Pose& p : kPoses) {
-    const testing::SyntheticPhoto photo = photo_of(spec, p, seed++);
+    const PinholeTargetPhoto photo = photo_of(spec, p, seed++);
     std::vector<std::vector<cv::Point2f>> markers;
     std::vector<int> ids, corner_ids;
     std::vector<cv::Point2f> corners;
@@ -188,7 +199,7 @@ TEST(CharucoLayouts, AWrongLayoutIsRefusedNotMisread) {
     const CharucoLayout requested = printed == CharucoLayout::legacy ? CharucoLayout::opencv : CharucoLayout::legacy;
     std::uint64_t seed = 10;
     for (const Pose& p : kPoses) {
-      const testing::SyntheticPhoto photo = photo_of(charuco(printed), p, seed++);
+      const PinholeTargetPhoto photo = photo_of(charuco(printed), p, seed++);
       const DetectionResult r = TargetDetector(charuco(requested)).detect(photo.image, "wrong");
       EXPECT_TRUE(r.view.corners.empty()) << r.view.corners.size() << " corners";
       EXPECT_NE(r.note.find("match the " + charuco_layout_name(printed) + " layout"), std::string::npos) << r.note;
@@ -201,7 +212,7 @@ TEST(CharucoLayouts, OpenCvAloneMisreadsALegacyBoard) {
   // Why the check above exists: OpenCV 4.6's interpolateCornersCharuco, given a
   // photo of a legacy board and its own (opencv layout) board, returns corners
   // under wrong ids, most of them a whole square away from their id's place.
-  const testing::SyntheticPhoto photo = photo_of(charuco(CharucoLayout::legacy), kPoses[0], 20);
+  const PinholeTargetPhoto photo = photo_of(charuco(CharucoLayout::legacy), kPoses[0], 20);
   const auto dictionary = cv::aruco::getPredefinedDictionary(cv::aruco::DICT_5X5_100);
   const auto board = cv::aruco::CharucoBoard::create(11, 8, 15.f, 11.f, dictionary);
   std::vector<std::vector<cv::Point2f>> markers;
@@ -227,10 +238,8 @@ TEST(CharucoLayouts, ACloseUpCannotTellTheLayoutsApart) {
   // unless the caller accepts views without layout evidence.
   const TargetSpec legacy = charuco(CharucoLayout::legacy);
   // 150 mm away the photo shows about 137 x 103 mm of the 165 x 120 mm board.
-  testing::PhotoSetup setup = testing::centred_setup(legacy, 150, 0.05, -0.05, 0.05);
-  setup.seed = 30;
-  setup.supersample = 3;  // the board is big in this photo
-  const testing::SyntheticPhoto photo = testing::synthesise_photo(legacy, setup);
+  const Pose close_up{0.05, -0.05, 0.05, Eigen::Vector2d::Zero()};
+  const PinholeTargetPhoto photo = photo_of(legacy, close_up, 30, 150, 3);  // 3x: the board is big in this photo
   const DetectionResult strict = TargetDetector(legacy).detect(photo.image, "close-up");
   EXPECT_TRUE(strict.view.corners.empty());
   EXPECT_NE(strict.note.find("cannot tell"), std::string::npos) << strict.note;
@@ -244,7 +253,7 @@ TEST(CharucoLayouts, ACloseUpCannotTellTheLayoutsApart) {
 
 TEST(CharucoLayouts, OddRowsAreTheSameBoard) {
   // 7 rows: both layouts print the same board; either spec reads it the same.
-  const testing::SyntheticPhoto photo = photo_of(charuco(CharucoLayout::opencv, 7), kPoses[1], 40);
+  const PinholeTargetPhoto photo = photo_of(charuco(CharucoLayout::opencv, 7), kPoses[1], 40);
   const ViewObservations a = detect_target(photo.image, charuco(CharucoLayout::opencv, 7), "odd");
   const ViewObservations b = detect_target(photo.image, charuco(CharucoLayout::legacy, 7), "odd");
   ASSERT_EQ(a.corners.size(), 60u);
@@ -259,7 +268,7 @@ TEST(CharucoLayouts, FirstIdSelectsTheBoard) {
   // Two boards from one dictionary: ids 0..43 and 50..93. Each spec finds only its own.
   TargetSpec second = charuco(CharucoLayout::opencv);
   second.first_id = 50;
-  const testing::SyntheticPhoto photo = photo_of(second, kPoses[2], 50);
+  const PinholeTargetPhoto photo = photo_of(second, kPoses[2], 50);
   EXPECT_EQ(detect_target(photo.image, second, "b").corners.size(), 70u);
   const DetectionResult other = TargetDetector(charuco(CharucoLayout::opencv)).detect(photo.image, "b");
   EXPECT_TRUE(other.view.corners.empty());
@@ -270,7 +279,7 @@ TEST(CharucoLayouts, FirstIdSelectsTheBoard) {
 
 TEST(Detect, AprilgridWithCoveredTagsReportsTheRest) {
   const TargetSpec spec = aprilgrid();
-  testing::SyntheticPhoto photo = photo_of(spec, kPoses[1], 60);
+  PinholeTargetPhoto photo = photo_of(spec, kPoses[1], 60);
   // Paint over tags 0 and 14 (mid-grey quadrilaterals over their squares).
   for (const int index : {0, 14}) {
     std::vector<cv::Point> quad;
@@ -299,7 +308,7 @@ TEST(Detect, NothingToFindIsNoError) {
     EXPECT_FALSE(r.note.empty());
   }
   // A chessboard photo holds no charuco board.
-  const testing::SyntheticPhoto photo = photo_of(chessboard(), kPoses[0], 70);
+  const PinholeTargetPhoto photo = photo_of(chessboard(), kPoses[0], 70);
   EXPECT_TRUE(detect_target(photo.image, charuco(CharucoLayout::opencv), "c").corners.empty());
 }
 
@@ -344,7 +353,7 @@ TEST(Detect, SingleMarkerOfAnotherIdIsNotFound) {
   s.dictionary = "DICT_4X4_50";
   s.first_id = 7;
   s.marker_size_mm = 30;
-  const testing::SyntheticPhoto photo = photo_of(s, kPoses[0], 80);
+  const PinholeTargetPhoto photo = photo_of(s, kPoses[0], 80);
   TargetSpec other = s;
   other.first_id = 8;
   const DetectionResult r = TargetDetector(other).detect(photo.image, "seven.png");

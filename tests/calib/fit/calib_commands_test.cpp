@@ -12,7 +12,8 @@
 #include <string>
 #include <sys/wait.h>
 
-#include "synthetic_views.h"
+#include "sim/calibration_views.h"
+#include "truth_cameras.h"
 #include "targets/observations_io.h"
 
 namespace glasspiv {
@@ -69,7 +70,7 @@ fs::path fresh_dir(const std::string& name) {
 Observations synthetic_views(unsigned seed) {
   std::mt19937 rng(seed);
   const CameraModel truth = testing::truth_opencv5();
-  return testing::observe(truth, {}, testing::plan_views(truth, {}, {}, rng), 0.1, rng);
+  return observe_board(truth, {}, plan_views(truth, {}, {}, rng), 0.1, rng);
 }
 
 const fs::path kPhotos = fs::path(GLASSPIV_SOURCE_DIR) / "data/calibration/opencv_left";

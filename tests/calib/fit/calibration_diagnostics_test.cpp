@@ -12,25 +12,22 @@
 #include "calib/fit/calibration_diagnostics.h"
 #include "calib/fit/intrinsic_fit.h"
 #include "calib/lens_maps.h"
-#include "synthetic_views.h"
+#include "sim/calibration_views.h"
+#include "truth_cameras.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
 namespace {
 
-using testing::observe;
-using testing::plan_views;
 using testing::truth_opencv5;
 using testing::truth_opencv8;
-using testing::SyntheticBoard;
-using testing::ViewPlan;
 
 constexpr double kNoisePx = 0.1;
 
 TEST(CalibrationDiagnostics, CoverageCountsEveryCorner) {
   const CameraModel truth = truth_opencv5();
   std::mt19937 rng(21);
-  const Observations obs = observe(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng);
+  const Observations obs = observe_board(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng);
   const Coverage cov = coverage(obs, truth.width_px(), truth.height_px(), 128);
   long total = 0;
   for (int n : cov.count) total += n;
@@ -42,7 +39,7 @@ TEST(CalibrationDiagnostics, CoverageCountsEveryCorner) {
 TEST(CalibrationDiagnostics, ResidualFieldShowsAPoorModel) {
   std::mt19937 rng(22);
   const CameraModel truth = truth_opencv8();
-  const Observations obs = observe(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng);
+  const Observations obs = observe_board(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng);
 
   IntrinsicFitOptions right;
   right.lens_model = LensModel::OpenCV8;
@@ -79,7 +76,7 @@ TEST(CalibrationDiagnostics, PredictedUncertaintyMatchesSpreadOfRefits) {
   double predicted_centre = 0, predicted_corner = 0;
   for (int i = 0; i < kRealisations; ++i) {
     std::mt19937 rng(1000 + i);
-    const IntrinsicFit fit = fit_intrinsics(observe(truth, {}, poses, kNoisePx, rng));
+    const IntrinsicFit fit = fit_intrinsics(observe_board(truth, {}, poses, kNoisePx, rng));
     q_centre.push_back(*fit.camera.project(p_centre));
     q_corner.push_back(*fit.camera.project(p_corner));
     predicted_centre += projection_uncertainty_at(fit, centre, 1000) / kRealisations;
@@ -108,7 +105,7 @@ TEST(CalibrationDiagnostics, PredictedUncertaintyMatchesSpreadOfRefits) {
 TEST(CalibrationDiagnostics, UncertaintyGridAndFigures) {
   const CameraModel truth = truth_opencv5();
   std::mt19937 rng(24);
-  const IntrinsicFit fit = fit_intrinsics(observe(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng));
+  const IntrinsicFit fit = fit_intrinsics(observe_board(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng));
   const GridValues grid = projection_uncertainty(fit, 1000, 128);
   const UncertaintyFigures figures = uncertainty_figures(fit, 1000);
   EXPECT_EQ(grid.valid_count, grid.grid.size());
@@ -123,7 +120,7 @@ TEST(CalibrationDiagnostics, UncertaintyGridAndFigures) {
   no_uncertainty.compute_uncertainty = false;
   std::mt19937 rng2(24);
   const IntrinsicFit bare =
-      fit_intrinsics(observe(truth, {}, plan_views(truth, {}, {}, rng2), kNoisePx, rng2), no_uncertainty);
+      fit_intrinsics(observe_board(truth, {}, plan_views(truth, {}, {}, rng2), kNoisePx, rng2), no_uncertainty);
   EXPECT_EQ(bare.intrinsics_covariance.size(), 0);
   EXPECT_THROW(projection_uncertainty_at(bare, {0, 0}, 1000), InputError);
 }
@@ -149,7 +146,7 @@ TEST(CalibrationDiagnostics, CrossValidationSeparatesRightAndWrongModels) {
   {
     const CameraModel truth = truth_opencv5();
     std::mt19937 rng(25);
-    const Observations obs = observe(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng);
+    const Observations obs = observe_board(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng);
     const CrossValidation cv = cross_validation(obs, {});
     std::cout << "cross-validation, right model (opencv5): difference RMS " << cv.difference.rms_px
               << " px, expected from noise " << cv.expected.rms_px << " px, ratio " << cv.ratio << "\n";
@@ -159,7 +156,7 @@ TEST(CalibrationDiagnostics, CrossValidationSeparatesRightAndWrongModels) {
   {
     const CameraModel truth = truth_opencv8();
     std::mt19937 rng(26);
-    const Observations obs = observe(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng);
+    const Observations obs = observe_board(truth, {}, plan_views(truth, {}, {}, rng), kNoisePx, rng);
     IntrinsicFitOptions options;
     options.lens_model = LensModel::OpenCV4;
     options.outlier_k = 0;  // the model error would otherwise be trimmed as "outliers"

@@ -20,7 +20,7 @@
 
 #include "calib/fit/extrinsic_fit.h"
 #include "calib/fit/marginal_covariance.h"
-#include "synthetic_views.h"
+#include "truth_cameras.h"
 #include "util/input_error.h"
 
 namespace glasspiv {

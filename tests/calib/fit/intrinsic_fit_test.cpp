@@ -24,18 +24,15 @@
 #include "calib/lens_maps.h"
 #include "mrcal_peer.h"
 #include "opencv_peer.h"
-#include "synthetic_views.h"
+#include "sim/calibration_views.h"
+#include "truth_cameras.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
 namespace {
 
-using testing::observe;
-using testing::plan_views;
 using testing::truth_opencv5;
 using testing::truth_opencv8;
-using testing::SyntheticBoard;
-using testing::ViewPlan;
 
 constexpr double kNoisePx = 0.1;
 
@@ -43,7 +40,7 @@ Observations make_views(const CameraModel& camera, const ViewPlan& plan, double 
                         const SyntheticBoard& board = {}) {
   std::mt19937 rng(seed);
   const std::vector<RigidTransform> poses = plan_views(camera, board, plan, rng);
-  return observe(camera, board, poses, noise_px, rng);
+  return observe_board(camera, board, poses, noise_px, rng);
 }
 
 // The pixel difference between two models for the same rays over the image
@@ -489,7 +486,7 @@ TEST(IntrinsicFit, IdenticalViewsAreRefused) {
   const CameraModel truth = truth_opencv5();
   std::mt19937 rng(31);
   const std::vector<RigidTransform> poses = plan_views(truth, {}, {}, rng);
-  const Observations one = observe(truth, {}, {poses[0]}, kNoisePx, rng);
+  const Observations one = observe_board(truth, {}, {poses[0]}, kNoisePx, rng);
   Observations copies = one;
   for (int i = 1; i < 13; ++i) copies.views.push_back(one.views[0]);
   try {
@@ -503,7 +500,8 @@ TEST(IntrinsicFit, IdenticalViewsAreRefused) {
     EXPECT_EQ(e.problem().find("nan"), std::string::npos) << e.problem();
   }
   // The same pose photographed 13 times: independent 0.1 px noise each time.
-  const Observations rephotographed = observe(truth, {}, std::vector<RigidTransform>(13, poses[0]), kNoisePx, rng);
+  const Observations rephotographed =
+      observe_board(truth, {}, std::vector<RigidTransform>(13, poses[0]), kNoisePx, rng);
   try {
     fit_intrinsics(rephotographed);
     FAIL() << "13 photos of one board pose were accepted";
@@ -511,7 +509,7 @@ TEST(IntrinsicFit, IdenticalViewsAreRefused) {
     EXPECT_NE(e.problem().find("views 0-12 are one board pose"), std::string::npos) << e.problem();
   }
   // A good set with two copies of view 3 appended: accepted, 20 distinct views.
-  Observations good = observe(truth, {}, poses, kNoisePx, rng);
+  Observations good = observe_board(truth, {}, poses, kNoisePx, rng);
   good.views.push_back(good.views[3]);
   good.views.push_back(good.views[3]);
   const IntrinsicFit fit = fit_intrinsics(good);
@@ -538,7 +536,7 @@ TEST(IntrinsicFit, ParallelBoards) {
   IntrinsicFitOptions options;
   options.lens_model = LensModel::Pinhole;
   try {
-    const IntrinsicFit fit = fit_intrinsics(observe(pinhole, {}, poses, kNoisePx, rng), options);
+    const IntrinsicFit fit = fit_intrinsics(observe_board(pinhole, {}, poses, kNoisePx, rng), options);
     FAIL() << "parallel boards accepted for a pinhole model: fx " << fit.camera.fx_px() << " (truth "
            << pinhole.fx_px() << "), 1-sigma " << fit.fx_sigma_px << ", reciprocal condition "
            << fit.reciprocal_condition;
@@ -548,7 +546,7 @@ TEST(IntrinsicFit, ParallelBoards) {
     EXPECT_NE(e.problem().find("reciprocal condition"), std::string::npos) << e.problem();
     EXPECT_EQ(e.problem().find("nan"), std::string::npos) << e.problem();
   }
-  const IntrinsicFit fit = fit_intrinsics(observe(truth, {}, poses, kNoisePx, rng));
+  const IntrinsicFit fit = fit_intrinsics(observe_board(truth, {}, poses, kNoisePx, rng));
   EXPECT_LT(std::abs(fit.camera.fx_px() - truth.fx_px()), 5 * fit.fx_sigma_px);
   EXPECT_LT(fit.fx_sigma_px, 0.01 * truth.fx_px());
 }

@@ -7,7 +7,7 @@
 
 #include "calib/camera_model.h"
 #include "calib/observations.h"
-#include "synthetic_views.h"
+#include "sim/calibration_views.h"
 #include "tests/python_mrcal.h"
 
 namespace glasspiv::testing {

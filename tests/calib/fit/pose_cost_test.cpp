@@ -10,7 +10,7 @@
 
 #include "calib/fit/pose_cost.h"
 #include "calib/rigid_transform.h"
-#include "synthetic_views.h"
+#include "truth_cameras.h"
 
 namespace glasspiv {
 namespace {
