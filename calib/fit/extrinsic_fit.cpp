@@ -187,6 +187,67 @@ double largest_rotation_sigma_deg(const Eigen::Vector3d& rvec, const Eigen::Matr
   return std::sqrt(std::max(0.0, lambda)) * kRadToDeg;
 }
 
+// Coplanar points: the RMS (px) of the IPPE solution that is not the fitted
+// pose (its camera centre more than 5 sigma or 1 % of the distance away, or
+// its rotation more than 5 sigma), refined by solvePnPRefineLM on the
+// undistorted points; nullopt when IPPE offers no such second pose.
+std::optional<double> other_planar_pose_rms(const CameraModel& camera, const std::vector<PointObservation>& points,
+                                            const std::vector<int>& inliers, const ExtrinsicFit& fit) {
+  std::vector<cv::Point3d> object;
+  std::vector<cv::Point2d> normalized;
+  std::vector<int> used;
+  for (int i : inliers) {
+    const UnprojectResult u = camera.unproject(points[static_cast<std::size_t>(i)].pixel_px);
+    if (!u.ok()) continue;
+    const Eigen::Vector3d& w = points[static_cast<std::size_t>(i)].point_world_mm;
+    object.emplace_back(w.x(), w.y(), w.z());
+    normalized.emplace_back(u.normalized.x(), u.normalized.y());
+    used.push_back(i);
+  }
+  if (static_cast<int>(object.size()) < kMinPosePoints) return std::nullopt;
+  std::vector<cv::Mat> rvecs, tvecs;
+  try {
+    cv::solvePnPGeneric(object, normalized, cv::Matx33d::eye(), cv::noArray(), rvecs, tvecs, false, cv::SOLVEPNP_IPPE);
+  } catch (const cv::Exception&) {
+    return std::nullopt;
+  }
+  const Eigen::Vector3d centre = fit.camera_from_world.inverse().translation_mm;
+  const double distance_mm = fit.camera_from_world.translation_mm.norm();
+  std::optional<double> best;
+  for (std::size_t k = 0; k < rvecs.size(); ++k) {
+    cv::Vec3d rvec(rvecs[k]), tvec(tvecs[k]);
+    try {
+      cv::solvePnPRefineLM(object, normalized, cv::Matx33d::eye(), cv::noArray(), rvec, tvec);
+    } catch (const cv::Exception&) {
+      continue;
+    }
+    if (!cv::checkRange(rvec) || !cv::checkRange(tvec)) continue;
+    const RigidTransform pose = RigidTransform::from_rvec_tvec(Eigen::Vector3d(rvec[0], rvec[1], rvec[2]),
+                                                               Eigen::Vector3d(tvec[0], tvec[1], tvec[2]));
+    const double moved_mm = (pose.inverse().translation_mm - centre).norm();
+    const double turned_deg =
+        Eigen::AngleAxisd(pose.rotation * fit.camera_from_world.rotation.transpose()).angle() * kRadToDeg;
+    if (moved_mm <= std::max(5 * fit.position_sigma_mm.norm(), 0.01 * distance_mm) &&
+        turned_deg <= 5 * fit.rotation_sigma_deg)
+      continue;  // the fitted pose itself
+    double sum2 = 0;
+    int count = 0;
+    for (int i : used) {
+      const auto px = camera.project(pose.apply(points[static_cast<std::size_t>(i)].point_world_mm));
+      if (!px) {
+        sum2 = std::numeric_limits<double>::infinity();
+        break;
+      }
+      sum2 += (*px - points[static_cast<std::size_t>(i)].pixel_px).squaredNorm();
+      ++count;
+    }
+    if (count == 0 || !std::isfinite(sum2)) continue;
+    const double rms = std::sqrt(sum2 / count);
+    if (!best || rms < *best) best = rms;
+  }
+  return best;
+}
+
 }  // namespace
 
 PoseSigma camera_centre_sigma(const RigidTransform& camera_from_world, const Eigen::MatrixXd& covariance) {
@@ -414,6 +475,22 @@ ExtrinsicFit fit_camera_pose(const CameraModel& camera, const std::vector<PointO
            format_number("%g", options.max_rotation_sigma_deg) + " deg) at " +
            format_number("%.3g", covariance_sigma) + " px noise from " + std::to_string(fit.inlier_count) +
            " points; use points spread wider over the image and in depth");
+
+  // --- Coplanar points: the other pose IPPE finds (the mirrored tilt of a
+  // small or distant plane) must fit clearly worse, or the fit could have
+  // picked either: refused, never a silently flipped pose.
+  if (planar && !options.projector) {
+    std::vector<int> inlier_index;
+    for (int i = 0; i < n; ++i)
+      if (fit_points[i].block) inlier_index.push_back(i);
+    const std::optional<double> other_rms = other_planar_pose_rms(camera, points, inlier_index, fit);
+    if (other_rms) fit.mirrored_pose_rms_px = *other_rms;
+    if (other_rms && options.refuse_planar_ambiguity &&
+        *other_rms <= kPlanarAmbiguityRatio * std::max(fit.rms_px, kObservabilitySigmaFloorPx))
+      refuse("two poses fit the " + std::to_string(fit.inlier_count) + " coplanar points about equally (RMS " +
+             format_number("%.3g", fit.rms_px) + " px and " + format_number("%.3g", *other_rms) +
+             " px for the mirrored tilt): add points off their plane, or spread them wider over the image");
+  }
 
   // --- The camera.
   if (options.refine_focal) {

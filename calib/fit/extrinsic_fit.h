@@ -58,6 +58,10 @@ struct ExtrinsicFitOptions {
   double max_position_sigma_mm = 10.0;
   double max_rotation_sigma_deg = 1.0;
   int num_threads = 1;
+  // Coplanar points whose mirrored pose fits within kPlanarAmbiguityRatio are
+  // refused; false returns the better of the two and reports the other's RMS
+  // (ExtrinsicFit::mirrored_pose_rms_px), as OpenCV's solvePnP would.
+  bool refuse_planar_ambiguity = true;
 };
 
 struct PointResidual {
@@ -83,6 +87,10 @@ struct ExtrinsicFit {
   double rms_px = 0;          // sqrt(mean |r|^2) over inliers
   double sigma_px = 0;        // sqrt(sum|r|^2 / (2n - p)), p = 6 (7 with refine_focal)
   double initial_rms_px = 0;  // after the PnP start (over the points that have an image there)
+  // Coplanar points: the RMS of the other pose IPPE finds (the mirrored tilt),
+  // refined; 0 when the points are not coplanar, or when that start refines
+  // back into the fitted pose (no second minimum: a wide or tilted plane).
+  double mirrored_pose_rms_px = 0;
   // Covariance of (angle-axis rad x3, translation mm x3[, focal scale]) in camera_from_world's
   // parameterisation, scaled by max(sigma_px, kObservabilitySigmaFloorPx)^2; plus derived figures:
   Eigen::MatrixXd covariance;
@@ -95,6 +103,11 @@ struct ExtrinsicFit {
 };
 
 constexpr int kMinPosePoints = 4;
+// Coplanar points: a fit is refused when the other pose that fits a plane (the
+// mirrored tilt IPPE also returns) has an RMS within this factor of the fit's
+// (with the fit's RMS floored at kObservabilitySigmaFloorPx): the data cannot
+// tell the two apart reliably (a single small marker, a distant flat target).
+constexpr double kPlanarAmbiguityRatio = 3.0;
 // Points count as collinear when the second singular value of their centred
 // coordinates is below this fraction of the first (1 um over 1 m).
 constexpr double kCollinearRelativeSpread = 1e-6;

@@ -12,7 +12,6 @@
 #include "render/scene_yaml.h"
 #include "render/setup_render.h"
 #include "targets/target_detect.h"
-#include "tests/sanitized_build.h"
 #include "tests/temp_dir.h"
 #include "util/input_error.h"
 
@@ -60,7 +59,7 @@ TEST(SceneFiducials, RenderedCornersLieWhereTheCameraProjectsThem) {
   look.textures = ps.textures_by_solid();
   const CameraModel& model = ps.camera().model;
   const std::vector<float> radiance =
-      render_setup(ps.trace, look, model, *ps.camera().camera_from_world, TraceOptions{}, kSanitizedBuild ? 2 : 4, 0);
+      render_setup(ps.trace, look, model, *ps.camera().camera_from_world, TraceOptions{}, 4, 0);
   cv::Mat gray(model.height_px(), model.width_px(), CV_8UC1);
   for (int r = 0; r < gray.rows; ++r)
     for (int c = 0; c < gray.cols; ++c)
