@@ -98,6 +98,22 @@ class LevelProblem : public ceres::CostFunction {
       for (int i = 0; i < 3; ++i) steps_[k++] = third_px * distance_mm / f;
   }
 
+  // Weighs the picture by its residual as measured at p (at least
+  // feature_sigma): a model that cannot match the photo closely (images behind
+  // spheres aliased, lighting not modelled) counts for less against the
+  // corners. Returns that RMS (feature units). One render.
+  double weigh_picture_at(const double* p) {
+    const double footprint_px = M_PI * std::pow(2 * std::max(options_.blur_px, 0.5), 2);
+    picture_weight_ = 1;
+    std::vector<double> r(static_cast<std::size_t>(num_residuals()));
+    residuals(p, r.data());
+    double sum2 = 0;
+    for (std::size_t i = 0; i < pixels_.size(); ++i) sum2 += r[i] * r[i];
+    const double rms = pixels_.empty() ? 0 : std::sqrt(sum2 / static_cast<double>(pixels_.size()));
+    picture_weight_ = std::sqrt(1.0 / footprint_px) / std::max(options_.feature_sigma, rms);
+    return rms;
+  }
+
   // The residuals at p: normalised photo features minus normalised render features.
   bool residuals(const double* p, double* out) const {
     const Model m = model_of(p, layout_, start_);
@@ -259,6 +275,7 @@ RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, co
           .gradient_ncc;
     };
     level.gradient_ncc_before = ncc_at(p);
+    if (!corners.empty()) level.picture_rms_before = cost->weigh_picture_at(p.data());
     ceres::Problem problem;
     problem.AddResidualBlock(cost, nullptr, p.data());
     ceres::Solver::Options solver;

@@ -14,7 +14,9 @@
 // when fiducial corners are given, their detected pixels against their traced
 // projections (align/refraction_pose.h). Both are weighted as measurements:
 // a corner by 1 / corner_sigma_px; the picture as one measurement per blur
-// footprint (pi (2 blur)^2 pixels) of feature_sigma. A picture of a narrow view
+// footprint (pi (2 blur)^2 pixels) of its residual as measured at the start of
+// each level (at least feature_sigma): a model that matches the photo less
+// well counts for less. A picture of a narrow view
 // cannot tell a small lateral shift from a small rotation (the gradient NCC of
 // the two differs by 1e-4 for 0.07 mm at 500 mm); the corners can. Ceres (Levenberg-Marquardt) drives it; its Jacobian is by central
 // differences of whole renders, with steps that move the picture by about a
@@ -83,6 +85,9 @@ struct RefineLevel {
   int iterations = 0, renders = 0;
   double seconds = 0;
   double corner_rms_px_after = 0;  // full-resolution px; 0 without corners
+  // With corners: the normalised features' RMS difference at the level's start,
+  // which (when above feature_sigma) sets the picture's weight for the level.
+  double picture_rms_before = 0;
   int corners_lost = 0;            // corners without a traced image at the end of the level
 };
 
