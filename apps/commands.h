@@ -14,6 +14,7 @@ void register_render_command(CLI::App& app);
 void register_correct_commands(CLI::App& app);  // correct, coverage
 void register_align_commands(CLI::App& app);    // align pose, check, refine, sensitivity
 void register_piv_command(CLI::App& app);
+void register_simulate_command(CLI::App& app);
 // Called by register_calib_commands on its `calib` group.
 void register_calib_detect_command(CLI::App& calib);
 

@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
   glasspiv::register_correct_commands(app);
   glasspiv::register_align_commands(app);
   glasspiv::register_piv_command(app);
+  glasspiv::register_simulate_command(app);
   // One check for the numbers of every command (finite, decimal, not negative where unsigned).
   glasspiv::check_numeric_options(app);
   try {

@@ -242,8 +242,10 @@ PivExperiment simulate_piv_experiment(const TraceScene& scene, const Sheet& shee
     const ExperimentCamera& cam = cameras[static_cast<std::size_t>(k)];
     ExperimentCameraResult& r = out.cameras[static_cast<std::size_t>(k)];
     CameraTruth& truth = r.truth;
-    truth.x_px = settings.truth_x_px;
-    truth.y_px = settings.truth_y_px;
+    if (static_cast<std::size_t>(k) < settings.truth_grids.size()) {
+      truth.x_px = settings.truth_grids[static_cast<std::size_t>(k)].x_px;
+      truth.y_px = settings.truth_grids[static_cast<std::size_t>(k)].y_px;
+    }
     if (truth.x_px.empty() || truth.y_px.empty()) {
       truth.x_px.resize(static_cast<std::size_t>(r.width));
       truth.y_px.resize(static_cast<std::size_t>(r.height));

@@ -66,9 +66,13 @@ struct PivExperimentSettings {
   double max_texels = double(1 << 26);
   TraceOptions trace;        // for the maps through the glass
   int samples_per_axis = 1;  // map samples per pixel axis
-  // Where the pixel truth is evaluated: x_px columns times y_px rows of the
-  // glass-removed view (e.g. the PIV grid's window centres); empty = every pixel.
-  std::vector<double> truth_x_px, truth_y_px;
+  // Where each camera's pixel truth is evaluated (indexed like the cameras):
+  // x_px columns times y_px rows of its glass-removed view, e.g. the PIV grid's
+  // window centres. A camera without one, or with an empty one: every pixel.
+  struct TruthGrid {
+    std::vector<double> x_px, y_px;
+  };
+  std::vector<TruthGrid> truth_grids;
   // The sheet truth's cell: this many px of the first camera's view on the sheet.
   double sheet_truth_step_px = 16;
   bool keep_maps = false;    // keep each camera's transport maps in the result

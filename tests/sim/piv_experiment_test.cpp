@@ -53,8 +53,9 @@ PivExperimentSettings settings_for(const ObliqueSetup& s, const PivOptions& piv)
   e.sensor.electrons_per_radiance = 4000;  // an in-plane particle's peak about 2000 counts
   e.keep_maps = true;
   const InterrogationGrid g = final_piv_grid(s.cameras[0].model.width_px(), s.cameras[0].model.height_px(), piv);
-  for (int c = 0; c < g.cols; ++c) e.truth_x_px.push_back(g.x_px(c));
-  for (int r = 0; r < g.rows; ++r) e.truth_y_px.push_back(g.y_px(r));
+  e.truth_grids.resize(1);
+  for (int c = 0; c < g.cols; ++c) e.truth_grids[0].x_px.push_back(g.x_px(c));
+  for (int r = 0; r < g.rows; ++r) e.truth_grids[0].y_px.push_back(g.y_px(r));
   return e;
 }
 
