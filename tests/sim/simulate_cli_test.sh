@@ -73,7 +73,7 @@ expect 0 "$G" simulate "$S" --flow rotation:28 --binning 8 --seed 3 -o again
 cmp -s run/cam0_truth_px.txt again/cam0_truth_px.txt || fail "the same seed gave another truth"
 expect 0 "$G" piv run/cam0_A.tif run/cam0_B.tif -o run.txt
 expect 0 "$G" piv again/cam0_A.tif again/cam0_B.tif -o again.txt
-cmp -s run.txt again.txt || fail "the same seed gave other frames"
+cmp -s <(grep -v "^#" run.txt) <(grep -v "^#" again.txt) || fail "the same seed gave other frames"
 # PIV on the reference pair agrees with the truth (same grid, same columns).
 expect 0 "$G" piv run/cam0_A_ref.tif run/cam0_B_ref.tif -o ref.txt --window 64,32,32
 rms=$(paste <(grep -v '^#' ref.txt) <(grep -v '^#' run/cam0_truth_px.txt) |
