@@ -19,10 +19,9 @@
 //    (FA = (Z(k) + conj Z(-k)) / 2, FB = (Z(k) - conj Z(-k)) / 2i), and one
 //    complex inverse FFT whose real part is R. Radix-2 passes run along
 //    columns, so every butterfly works on whole rows (vectorised), with a
-//    transpose between the two axes, two stages fused per trip through
-//    memory; forward passes are decimation in frequency (bit-reversed
-//    output), inverse ones decimation in time (bit-reversed input), so no
-//    separate reordering pass. Float, twiddles
+//    transpose between the two axes; forward passes are decimation in
+//    frequency (bit-reversed output), inverse ones decimation in time
+//    (bit-reversed input), so no separate reordering pass. Float, twiddles
 //    rounded from double. Plans (twiddles, index tables, buffers) are made
 //    once per correlator; no allocation per window.
 //  - opencv (any plane_px): OpenCV's real DFT (CCS packing), mulSpectrums
