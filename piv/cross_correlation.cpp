@@ -69,101 +69,32 @@ inline void butterfly_dit(float* __restrict ar, float* __restrict ai, float* __r
 #define GLASSPIV_FFT_CLONES
 #endif
 
-// Two radix-2 stages fused over four rows (a radix-2^2 step): the same
-// operations in the same order as two separate stages, one trip through
-// memory. Forward (decimation in frequency): stage h on the pairs (0, 2),
-// (1, 3) with twiddles w02, w13, then stage h / 2 on (0, 1), (2, 3) with w.
-inline void fused_dif(float* __restrict r0, float* __restrict i0, float* __restrict r1, float* __restrict i1,
-                      float* __restrict r2, float* __restrict i2, float* __restrict r3, float* __restrict i3,
-                      const float w02[2], const float w13[2], const float w[2], int n) {
-  for (int x = 0; x < n; ++x) {
-    const float t2r = r0[x] - r2[x], t2i = i0[x] - i2[x], t3r = r1[x] - r3[x], t3i = i1[x] - i3[x];
-    const float a0r = r0[x] + r2[x], a0i = i0[x] + i2[x], a1r = r1[x] + r3[x], a1i = i1[x] + i3[x];
-    const float a2r = t2r * w02[0] - t2i * w02[1], a2i = t2r * w02[1] + t2i * w02[0];
-    const float a3r = t3r * w13[0] - t3i * w13[1], a3i = t3r * w13[1] + t3i * w13[0];
-    const float b1r = a0r - a1r, b1i = a0i - a1i, b3r = a2r - a3r, b3i = a2i - a3i;
-    r0[x] = a0r + a1r;
-    i0[x] = a0i + a1i;
-    r1[x] = b1r * w[0] - b1i * w[1];
-    i1[x] = b1r * w[1] + b1i * w[0];
-    r2[x] = a2r + a3r;
-    i2[x] = a2i + a3i;
-    r3[x] = b3r * w[0] - b3i * w[1];
-    i3[x] = b3r * w[1] + b3i * w[0];
-  }
-}
-
-// Inverse (decimation in time): stage h on (0, 1), (2, 3) with w, then stage
-// 2h on (0, 2), (1, 3) with w02, w13.
-inline void fused_dit(float* __restrict r0, float* __restrict i0, float* __restrict r1, float* __restrict i1,
-                      float* __restrict r2, float* __restrict i2, float* __restrict r3, float* __restrict i3,
-                      const float w[2], const float w02[2], const float w13[2], int n) {
-  for (int x = 0; x < n; ++x) {
-    const float t1r = r1[x] * w[0] - i1[x] * w[1], t1i = r1[x] * w[1] + i1[x] * w[0];
-    const float t3r = r3[x] * w[0] - i3[x] * w[1], t3i = r3[x] * w[1] + i3[x] * w[0];
-    const float a0r = r0[x] + t1r, a0i = i0[x] + t1i, a1r = r0[x] - t1r, a1i = i0[x] - t1i;
-    const float a2r = r2[x] + t3r, a2i = i2[x] + t3i, a3r = r2[x] - t3r, a3i = i2[x] - t3i;
-    const float u2r = a2r * w02[0] - a2i * w02[1], u2i = a2r * w02[1] + a2i * w02[0];
-    const float u3r = a3r * w13[0] - a3i * w13[1], u3i = a3r * w13[1] + a3i * w13[0];
-    r0[x] = a0r + u2r;
-    i0[x] = a0i + u2i;
-    r2[x] = a0r - u2r;
-    i2[x] = a0i - u2i;
-    r1[x] = a1r + u3r;
-    i1[x] = a1i + u3i;
-    r3[x] = a1r - u3r;
-    i3[x] = a1i - u3i;
-  }
-}
-
 // Radix-2 passes along columns of an n x n split-complex plane (every
-// butterfly on whole rows), two stages at a time where two are left;
-// twiddle k = e^{-2 pi i k / n}, k < n / 2.
+// butterfly on whole rows); twiddle k = e^{-2 pi i k / n}, k < n / 2.
 // Forward (e^{-i}): decimation in frequency, natural in, bit-reversed out.
 GLASSPIV_FFT_CLONES
 void forward_columns(float* re, float* im, const float* twiddle_re, const float* twiddle_im, int n) {
-  auto row = [n](float* p, int r) { return p + static_cast<std::ptrdiff_t>(r) * n; };
-  int h = n / 2;
-  for (; h >= 2; h /= 4) {
-    const int step = n / (2 * h), q = h / 2;
+  for (int h = n / 2; h >= 1; h /= 2) {
+    const int step = n / (2 * h);
     for (int base = 0; base < n; base += 2 * h)
-      for (int j = 0; j < q; ++j) {
-        const int k0 = base + j, k1 = k0 + q, k2 = k0 + h, k3 = k2 + q;
-        const float w02[2] = {twiddle_re[j * step], twiddle_im[j * step]};
-        const float w13[2] = {twiddle_re[(j + q) * step], twiddle_im[(j + q) * step]};
-        const float w[2] = {twiddle_re[2 * j * step], twiddle_im[2 * j * step]};
-        fused_dif(row(re, k0), row(im, k0), row(re, k1), row(im, k1), row(re, k2), row(im, k2), row(re, k3),
-                  row(im, k3), w02, w13, w, n);
+      for (int j = 0; j < h; ++j) {
+        const std::ptrdiff_t ra = static_cast<std::ptrdiff_t>(base + j) * n, rb = ra + static_cast<std::ptrdiff_t>(h) * n;
+        butterfly_dif(re + ra, im + ra, re + rb, im + rb, twiddle_re[j * step], twiddle_im[j * step], j == 0, n);
       }
   }
-  if (h == 1)
-    for (int base = 0; base < n; base += 2)
-      butterfly_dif(row(re, base), row(im, base), row(re, base + 1), row(im, base + 1), 1.0f, 0.0f, true, n);
 }
 
-// Inverse (e^{+i}, unscaled): decimation in time, bit-reversed in, natural
-// out. The inverse twiddle is the conjugate of the forward one.
+// Inverse (e^{+i}, unscaled): decimation in time, bit-reversed in, natural out.
 GLASSPIV_FFT_CLONES
 void inverse_columns(float* re, float* im, const float* twiddle_re, const float* twiddle_im, int n) {
-  auto row = [n](float* p, int r) { return p + static_cast<std::ptrdiff_t>(r) * n; };
-  int h = 1;
-  for (; 2 * h < n; h *= 4) {
-    const int step = n / (2 * h), step2 = step / 2;
-    for (int base = 0; base < n; base += 4 * h)
-      for (int j = 0; j < h; ++j) {
-        const int k0 = base + j, k1 = k0 + h, k2 = k0 + 2 * h, k3 = k2 + h;
-        const float w[2] = {twiddle_re[j * step], -twiddle_im[j * step]};
-        const float w02[2] = {twiddle_re[j * step2], -twiddle_im[j * step2]};
-        const float w13[2] = {twiddle_re[(j + h) * step2], -twiddle_im[(j + h) * step2]};
-        fused_dit(row(re, k0), row(im, k0), row(re, k1), row(im, k1), row(re, k2), row(im, k2), row(re, k3),
-                  row(im, k3), w, w02, w13, n);
-      }
-  }
-  if (h < n) {  // one stage left, h = n / 2
+  for (int h = 1; h < n; h *= 2) {
     const int step = n / (2 * h);
-    for (int j = 0; j < h; ++j)
-      butterfly_dit(row(re, j), row(im, j), row(re, j + h), row(im, j + h), twiddle_re[j * step],
-                    -twiddle_im[j * step], j == 0, n);
+    for (int base = 0; base < n; base += 2 * h)
+      for (int j = 0; j < h; ++j) {
+        const std::ptrdiff_t ra = static_cast<std::ptrdiff_t>(base + j) * n, rb = ra + static_cast<std::ptrdiff_t>(h) * n;
+        // The inverse twiddle is the conjugate of the forward one.
+        butterfly_dit(re + ra, im + ra, re + rb, im + rb, twiddle_re[j * step], -twiddle_im[j * step], j == 0, n);
+      }
   }
 }
 
