@@ -1,8 +1,7 @@
 // piv_bench: PIV evaluation speed and accuracy (results in bench/RESULTS.md).
 //  1. vectors per second per pass: 32 px windows, 50 % overlap, one undeformed
 //     pass over a 1024 x 1024 px synthetic pair, on 1 and on N threads (default
-//     2), and the correlation (with and without the peak) alone on one
-//     thread, on the radix-2 FFT path evaluate_piv uses and on OpenCV's DFT;
+//     2), and the correlation + peak alone on one thread;
 //  2. time versus error: passes, window sizes and deformation interpolations
 //     on a 512 x 512 px pair of a rotation plus a uniform shift.
 // usage: piv_bench [threads] [reps]
@@ -74,29 +73,23 @@ int main(int argc, char** argv) {
     const double m = bench::median(s);
     std::printf("| %d | %.4f | %.0f |\n", t, m, n / m);
   }
-  // The correlator alone, on both FFT paths (cross_correlation.h): OpenCV's
-  // real DFT is the path evaluate_piv used before the radix-2 one.
-  const int stride = static_cast<int>(p.a.step1());
-  for (const CorrelationFft fft : {CorrelationFft::opencv, CorrelationFft::radix2})
-    for (const bool with_peak : {false, true}) {
-      WindowCorrelator c(32, fft);
-      std::vector<double> s;
-      int windows = 0;
-      for (int r = 0; r < reps; ++r)
-        s.push_back(bench::seconds_of([&] {
-          windows = 0;
-          for (int y = 0; y + 32 <= 1024; y += 16)
-            for (int x = 0; x + 32 <= 1024; x += 16) {
-              const bool ok =
-                  c.correlate(p.a.ptr<float>(y) + x, stride, nullptr, p.b.ptr<float>(y) + x, stride, nullptr);
-              windows += with_peak ? find_correlation_peak(c).found : ok;
-            }
-        }));
-      const double m = bench::median(s);
-      std::printf("| 1, correlation%s only, %s | %.4f | %.0f |\n", with_peak ? " + peak" : "",
-                  fft == CorrelationFft::opencv ? "OpenCV DFT (before)" : "radix-2 (evaluate_piv)", m, windows / m);
-    }
-  std::printf("\n");
+  {
+    WindowCorrelator c(32);
+    const int stride = static_cast<int>(p.a.step1());
+    std::vector<double> s;
+    int windows = 0;
+    for (int r = 0; r < reps; ++r)
+      s.push_back(bench::seconds_of([&] {
+        windows = 0;
+        for (int y = 0; y + 32 <= 1024; y += 16)
+          for (int x = 0; x + 32 <= 1024; x += 16) {
+            c.correlate(p.a.ptr<float>(y) + x, stride, nullptr, p.b.ptr<float>(y) + x, stride, nullptr);
+            windows += find_correlation_peak(c).found;
+          }
+      }));
+    const double m = bench::median(s);
+    std::printf("| 1, correlation + peak only | %.4f | %.0f |\n\n", m, windows / m);
+  }
 
   // 2. Time versus error.
   ParticleImageOptions mid;
