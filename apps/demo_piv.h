@@ -1,0 +1,61 @@
+#pragma once
+// The demo's PIV step: a simulated experiment in the reactor (sim/piv_experiment.h)
+// with an analytic flow, a Lamb-Oseen vortex centred on the sheet, recorded by
+// the one camera of reactor.yaml; PIV (piv/piv_evaluate.h) on the glass-removed
+// reference pair, on the distorted pair corrected onto the glass-removed camera
+// grid, and on the distorted pair as recorded, each scored against the exact
+// displacement; the sheet grid's masked area with one camera and with the five
+// of reactor_5cams.yaml; pictures, an HTML page and metrics.json.
+#include <string>
+#include <vector>
+
+namespace glasspiv {
+
+// RMS of |measured - true| (px) over the scored vectors.
+struct DemoPivScore {
+  double rms_px = 0, max_px = 0;
+  int vectors = 0;
+};
+
+struct DemoPivSummary {
+  int width = 0, height = 0;  // the camera, binned
+  int binning = 0;
+  // The flow: a steady Lamb-Oseen vortex about the sheet normal through the sheet's origin.
+  double core_radius_mm = 0, circulation_m2_per_s = 0, dt_s = 0;
+  // The experiment.
+  std::size_t tracers = 0;
+  double density_ppp = 0, particle_px = 0, max_displacement_px = 0;
+  int bit_depth = 0;
+  std::vector<std::string> warnings;
+  double simulate_seconds = 0;
+  // PIV: windows (px, one per pass) and overlap; vectors of the final grid.
+  std::vector<int> window_px;
+  double overlap = 0;
+  int grid_cols = 0, grid_rows = 0;
+  double piv_seconds = 0;  // the three evaluations
+  // Scored where the corrected frames are usable and the truth exists (no glass:
+  // wherever the truth exists).
+  DemoPivScore no_glass, corrected, uncorrected;
+  DemoPivScore corrected_inner;  // windows with no masked pixel at all (what the mask's rim costs)
+  double masked_pixel_fraction = 0;  // of the camera grid, by the correction's mask
+  // The rectified sheet grid: masked fraction of its fluid region (correct/cell_mask.h).
+  double one_camera_sheet_masked = 0;  // reactor.yaml's camera, on its grid
+  double five_centre_sheet_masked = 0, five_sheet_masked = 0;  // reactor_5cams.yaml: centre camera alone, all five
+  int five_binning = 0;
+  double five_seconds = 0;
+  bool five_piv = false;  // whether a five-camera PIV was run (not yet: five_piv_note says so)
+  std::string five_piv_note;
+  std::string distorted_png, corrected_png, error_corrected_png, error_uncorrected_png, vectors_txt, html,
+      metrics_json;
+  double seconds = 0;
+};
+
+// scenes_dir holds the embedded reactor.yaml and reactor_5cams.yaml (with
+// their camera files where the scenes expect them); binning: the camera's
+// read-out binning; five_cache_dir: where the five cameras' maps and
+// operators are cached (the correction step's cache, validated on reading; ""
+// for none), at twice that binning as the correction step uses.
+DemoPivSummary run_piv_demo(const std::string& folder, const std::string& scenes_dir, int binning,
+                            const std::string& five_cache_dir);
+
+}  // namespace glasspiv
