@@ -1,6 +1,7 @@
 // glasspiv demo: the embedded example session: the example camera in all four
 // file formats, a calibration session on synthetic photos, the reactor rendered,
-// corrected, and aligned on a photograph.
+// corrected, aligned on a photograph, and a simulated PIV experiment in it
+// evaluated against the truth.
 #include <cstdio>
 #include <filesystem>
 #include <string_view>
@@ -270,7 +271,8 @@ void run_demo(const std::string& out_dir) {
   run_piv_step(out, scenes_dir, kBinning);
 
   std::printf("\nNext: `glasspiv camera --help`, `glasspiv calib --help`, `glasspiv target --help`, "
-              "`glasspiv render --help`, `glasspiv correct --help`, `glasspiv coverage --help`, `glasspiv align --help`.\n");
+              "`glasspiv render --help`, `glasspiv correct --help`, `glasspiv coverage --help`, `glasspiv align --help`, "
+              "`glasspiv simulate --help`, `glasspiv piv --help`.\n");
 }
 
 }  // namespace
