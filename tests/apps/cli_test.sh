@@ -40,7 +40,7 @@ cams="$src/data/cameras"
 # --help on every command.
 for cmd in "" "camera" "camera convert" "camera show" "camera compare" "demo" "calib" "calib detect" \
   "calib intrinsics" "calib report" "target" "target print" "target show" "render" "correct" "coverage" \
-  "align" "align pose" "align check" "align refine" "align sensitivity"; do
+  "align" "align pose" "align check" "align refine" "align sensitivity" "piv" "simulate"; do
   # shellcheck disable=SC2086
   "$glasspiv" $cmd --help >"$work/out" 2>&1 && grep -q "Usage" "$work/out" && ok || fail "glasspiv $cmd --help"
 done
