@@ -50,7 +50,7 @@ struct AlignOptions {
   int step_px = 8, mc_samples = 0;
   std::string pose_json;
   unsigned seed = 1;
-  int samples = 2, threads = 0;
+  int samples = 2, threads = 0, binning = 1;
   double blur_px = 1.5;
 };
 
@@ -132,7 +132,7 @@ void check_files(const AlignOptions& o, const PreparedScene& ps) {
 // One camera's pose from its photos: detection, fit, report; its JSON object.
 nlohmann::json pose_one_camera(const AlignOptions& o, const std::string& camera, const std::vector<std::string>& photos,
                                std::vector<CameraPoseUpdate>* updates) {
-  const PreparedScene ps = prepare_scene(o.scene, camera);
+  const PreparedScene ps = prepare_scene(o.scene, camera, o.binning);
   const std::vector<SceneFiducial> fiducials = scene_fiducials(ps.scene);
   if (fiducials.empty())
     throw InputError(o.scene, "solids", "the scene has no fiducials (rectangles whose texture is a target spec)");
@@ -309,7 +309,7 @@ CornerDistances corner_distances(const PreparedScene& ps, const std::vector<Scen
 
 void run_check(const AlignOptions& o) {
   if (lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
-  const PreparedScene ps = prepare_scene(o.scene, o.camera);
+  const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning);
   check_files(o, ps);
   std::vector<OutputFile> more = {{sibling(o.output, "_edges"), "-o"}, {sibling(o.output, "_checker"), "-o"}};
   check_outputs(scene_input_files(ps.scene), more);
@@ -337,7 +337,7 @@ void run_refine(const AlignOptions& o) {
   if (!o.output.empty() && lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
   for (int b : o.levels)
     if (b < 1 || b > 64) throw InputError("", "--levels", fmt::format("binning {} is not in 1..64", b));
-  const PreparedScene ps = prepare_scene(o.scene, o.camera);
+  const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning);
   check_files(o, ps);
   const CameraModel& model = ps.camera().model;
   const cv::Mat photo = read_photo_values(o.photos.front(), model, ps.camera_name());
@@ -462,7 +462,7 @@ void run_sensitivity(const AlignOptions& o) {
   if (lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
   if (o.step_px < 1) throw InputError("", "--step-px", "must be 1 or more");
   if (o.mc_samples == 1) throw InputError("", "--monte-carlo", "needs 2 samples or more");
-  const PreparedScene ps = prepare_scene(o.scene, o.camera);
+  const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning);
   std::vector<std::string> inputs = scene_input_files(ps.scene);
   if (!o.pose_json.empty()) inputs.push_back(o.pose_json);
   std::vector<OutputFile> outputs = {{o.output, "-o"}, {sibling(o.output, "_px"), "-o"}};
@@ -503,6 +503,11 @@ void run_sensitivity(const AlignOptions& o) {
   write_json(o.json, j);
 }
 
+void add_binning(CLI::App* c, AlignOptions& o) {
+  c->add_option("--binning", o.binning, "the camera read out K x K binned (photos of that size; quick runs)")
+      ->check(CLI::Range(1, 64));
+}
+
 void add_common(CLI::App* c, AlignOptions& o, bool many_photos) {
   c->add_option("SCENE", o.scene, "scene file (docs/scene.md)")->required()->check(CLI::ExistingFile);
   if (many_photos)
@@ -516,6 +521,7 @@ void add_common(CLI::App* c, AlignOptions& o, bool many_photos) {
         ->check(CLI::ExistingFile);
   c->add_option("--camera", o.camera, "the scene's camera that took the photos (default: the first)");
   c->add_option("--json", o.json, "also write the figures as JSON");
+  add_binning(c, o);
 }
 
 }  // namespace
@@ -533,6 +539,7 @@ void register_align_commands(CLI::App& app) {
   pose->add_option("--camera", o.camera, "the scene's camera that took PHOTO... (default: the first)");
   pose->add_option("--photo", o.camera_photos, "CAMERA=FILE: a photo of another camera (repeat for a rig)");
   pose->add_option("--json", o.json, "also write the figures as JSON");
+  add_binning(pose, o);
   pose->add_option("-o,--scene-out", o.scene_out, "write the scene with the new pose (in the scene's folder)");
   pose->add_flag("--pinhole", o.pinhole, "plain pinhole projection only (ignore the glass between camera and markers)");
   pose->add_flag("--refine-focal", o.refine_focal, "also fit one scale on the focal length");
@@ -573,6 +580,7 @@ void register_align_commands(CLI::App& app) {
   sens->add_option("--camera", o.camera, "the scene's camera (default: the first)");
   sens->add_option("-o", o.output, "heat map PNG of the mm displacement (also <stem>_px.png)")->required();
   sens->add_option("--json", o.json, "also write the table as JSON");
+  add_binning(sens, o);
   sens->add_option("--camera-mm", o.tol_camera_mm, "camera position 1-sigma per axis, mm")->check(CLI::NonNegativeNumber);
   sens->add_option("--camera-deg", o.tol_camera_deg, "camera rotation 1-sigma per axis, deg")->check(CLI::NonNegativeNumber);
   sens->add_option("--glass-mm", o.tol_glass_mm, "glass position 1-sigma per axis, mm")->check(CLI::NonNegativeNumber);

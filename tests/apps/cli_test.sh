@@ -315,5 +315,28 @@ expect_ok "$glasspiv" align sensitivity "$reactor" -o "$work/sens.png" --step-px
 [ -s "$work/sens.png" ] && [ -s "$work/sens_px.png" ] && grep -q median_mm "$work/sens.json" && ok \
   || fail "align sensitivity outputs"
 
+# align end to end on the reactor with markers, binned 4 x 4: a setup render as
+# the photo, pose from its markers into a new scene, check, refine, sensitivity.
+mkdir -p "$work/al/scenes" "$work/al/cameras"
+cp -r "$src/data/scenes/reactor_markers.yaml" "$src/data/scenes/markers" "$work/al/scenes/"
+cp "$cams/example.yaml" "$work/al/cameras/"
+al="$work/al/scenes"
+expect_ok "$glasspiv" render "$al/reactor_markers.yaml" --setup -o "$work/al/photo.png" --binning 4 --format 8
+expect_ok "$glasspiv" align pose "$al/reactor_markers.yaml" "$work/al/photo.png" --binning 4 -o "$al/posed.yaml" \
+  --json "$work/al/pose.json"
+grep -q '"covariance"' "$work/al/pose.json" && grep -q "pose:" "$al/posed.yaml" && ok || fail "align pose outputs"
+expect_error 2 "posed_elsewhere.yaml" "scene's own folder" -- "$glasspiv" align pose "$al/reactor_markers.yaml" \
+  "$work/al/photo.png" --binning 4 -o "$work/al/posed_elsewhere.yaml"
+expect_error 2 "photo.png" "size" -- "$glasspiv" align pose "$al/reactor_markers.yaml" "$work/al/photo.png"
+expect_ok "$glasspiv" align check "$al/posed.yaml" "$work/al/photo.png" --binning 4 -o "$work/al/check.png" \
+  --json "$work/al/check.json"
+[ -s "$work/al/check_edges.png" ] && [ -s "$work/al/check_checker.png" ] && grep -q gradient_ncc "$work/al/check.json" \
+  && ok || fail "align check outputs"
+expect_ok "$glasspiv" align refine "$al/posed.yaml" "$work/al/photo.png" --binning 4 --levels 8 \
+  --scene-out "$al/refined.yaml"
+expect_ok "$glasspiv" align sensitivity "$al/posed.yaml" --binning 4 -o "$work/al/sens.png" \
+  --pose-json "$work/al/pose.json" --step-px 32
+cmp -s "$src/data/scenes/reactor_markers.yaml" "$al/reactor_markers.yaml" && ok || fail "align changed its input scene"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
