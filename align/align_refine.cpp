@@ -4,6 +4,8 @@
 #include <cmath>
 #include <memory>
 #include <stdexcept>
+#include <type_traits>
+#include <variant>
 
 #include <ceres/ceres.h>
 #include <opencv2/imgproc.hpp>
@@ -59,6 +61,26 @@ cv::Mat feature_of(const cv::Mat& image, double blur_px, bool intensity) {
   cv::Mat out;
   cv::GaussianBlur(image, out, cv::Size(), blur_px, blur_px, cv::BORDER_REPLICATE);
   return out;
+}
+
+// The distance that converts a third of a pixel into mm: the median distance
+// from the camera to the solids in front of it (the setup it sees; the sheet
+// is not needed for alignment), else 1 m.
+double typical_distance_mm(const TraceScene& scene, const RigidTransform& camera_from_world) {
+  std::vector<double> depths;
+  for (const TraceSolid& solid : scene.solids)
+    std::visit(
+        [&](const auto& shape) {
+          using T = std::decay_t<decltype(shape)>;
+          if constexpr (!std::is_same_v<T, TriangleMesh>) {
+            const double z = camera_from_world.apply(shape.centre_mm).z();
+            if (z > 0) depths.push_back(z);
+          }
+        },
+        solid.shape);
+  if (depths.empty()) return 1000;
+  std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+  return std::max(1.0, depths[depths.size() / 2]);
 }
 
 // Samples per pixel and axis at binning b: as asked, or (0) as many as make a
@@ -243,9 +265,7 @@ RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, co
   const Stopwatch total;
   const Layout layout{parameters.focal, parameters.refractive_index, parameters.glass_position};
   const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
-  // The distance that converts a third of a pixel into mm: camera to the sheet's origin.
-  const double distance_mm =
-      std::max(1.0, start_camera_from_world.apply(scene.sheet.origin_mm).norm());
+  const double distance_mm = typical_distance_mm(scene, start_camera_from_world);
   std::vector<double> p(static_cast<std::size_t>(layout.size()), 0.0);
   RefineResult result;
   for (int b : options.binning_levels) {

@@ -18,10 +18,10 @@ std::vector<const SheetTexture*> PreparedScene::textures_by_solid() const {
   return out;
 }
 
-PreparedScene prepare_scene(const std::string& path, const std::string& camera_name, int binning) {
+PreparedScene prepare_scene(const std::string& path, const std::string& camera_name, int binning, SceneUse use) {
   PreparedScene ps;
   ps.scene = read_scene(path);
-  if (!ps.scene.sheet) throw InputError(path, "sheet", "the scene has no sheet to render");
+  if (!ps.scene.sheet && use == SceneUse::sheet) throw InputError(path, "sheet", "the scene has no sheet to render");
   if (ps.scene.cameras.empty()) throw InputError(path, "cameras", "the scene has no camera");
   if (!camera_name.empty()) {
     ps.camera_index = -1;
@@ -35,7 +35,17 @@ PreparedScene prepare_scene(const std::string& path, const std::string& camera_n
   }
   Camera& chosen = ps.scene.cameras[static_cast<std::size_t>(ps.camera_index)].camera;
   if (binning > 1) chosen.model = binned(chosen.model, binning);
-  ps.trace = build_trace_scene(ps.scene, &ps.info);
+  if (ps.scene.sheet) {
+    ps.trace = build_trace_scene(ps.scene, &ps.info);
+  } else {
+    Scene traced = ps.scene;
+    Sheet placeholder;
+    placeholder.origin_mm = Eigen::Vector3d(0, 0, 0.9 * kMaxSceneCoordinate_mm);
+    placeholder.extent_mm = {kMinSceneSize_mm, kMinSceneSize_mm};
+    placeholder.thickness_mm = kMinSceneSize_mm;
+    traced.sheet = placeholder;
+    ps.trace = build_trace_scene(traced, &ps.info);
+  }
   for (const RectangleSolid& r : ps.scene.rectangles) {
     if (r.texture.empty()) {
       ps.rectangle_textures.emplace_back();

@@ -29,9 +29,18 @@ struct PreparedScene {
   std::vector<const SheetTexture*> textures_by_solid() const;
 };
 
+// What a caller needs of the scene: the sheet (renders of it, the transport
+// map, the sensitivity of sheet points), or only the setup (alignment: glass,
+// opaque parts and fiducials; a scene without a sheet is fine).
+enum class SceneUse { sheet, setup_only };
+
 // camera_name "" = the first camera; binning > 1 reads the chosen camera out
-// binned (calib/camera_model.h: binned). A scene without a sheet or without
-// cameras, or an unknown camera name, is an InputError.
-PreparedScene prepare_scene(const std::string& path, const std::string& camera_name, int binning = 1);
+// binned (calib/camera_model.h: binned). A scene without cameras, an unknown
+// camera name, or (SceneUse::sheet) a scene without a sheet is an InputError.
+// A setup-only scene without a sheet is traced with a 1 um sheet far outside
+// the scene that no ray crosses in practice (the tracer needs a plane; the
+// setup render ignores crossings).
+PreparedScene prepare_scene(const std::string& path, const std::string& camera_name, int binning = 1,
+                            SceneUse use = SceneUse::sheet);
 
 }  // namespace glasspiv

@@ -132,7 +132,7 @@ void check_files(const AlignOptions& o, const PreparedScene& ps) {
 // One camera's pose from its photos: detection, fit, report; its JSON object.
 nlohmann::json pose_one_camera(const AlignOptions& o, const std::string& camera, const std::vector<std::string>& photos,
                                std::vector<CameraPoseUpdate>* updates) {
-  const PreparedScene ps = prepare_scene(o.scene, camera, o.binning);
+  const PreparedScene ps = prepare_scene(o.scene, camera, o.binning, SceneUse::setup_only);
   const std::vector<SceneFiducial> fiducials = scene_fiducials(ps.scene);
   if (fiducials.empty())
     throw InputError(o.scene, "solids", "the scene has no fiducials (rectangles whose texture is a target spec)");
@@ -309,7 +309,7 @@ CornerDistances corner_distances(const PreparedScene& ps, const std::vector<Scen
 
 void run_check(const AlignOptions& o) {
   if (lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
-  const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning);
+  const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning, SceneUse::setup_only);
   check_files(o, ps);
   std::vector<OutputFile> more = {{sibling(o.output, "_edges"), "-o"}, {sibling(o.output, "_checker"), "-o"}};
   check_outputs(scene_input_files(ps.scene), more);
@@ -337,7 +337,7 @@ void run_refine(const AlignOptions& o) {
   if (!o.output.empty() && lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
   for (int b : o.levels)
     if (b < 1 || b > 64) throw InputError("", "--levels", fmt::format("binning {} is not in 1..64", b));
-  const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning);
+  const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning, SceneUse::setup_only);
   check_files(o, ps);
   const CameraModel& model = ps.camera().model;
   const cv::Mat photo = read_photo_values(o.photos.front(), model, ps.camera_name());

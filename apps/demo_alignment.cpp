@@ -33,7 +33,7 @@ namespace fs = std::filesystem;
 constexpr int kPhotoSamplesPerAxis = 3;
 // Coarse levels only, relative to the demo's binned camera (80 x 67 and
 // 160 x 135 px, intensities: the wide basin); with the corners they end
-// 0.065 mm from the truth. A binning 2 level (gradients) would double this
+// 0.067 mm from the truth. A binning 2 level (gradients) would double this
 // step's run time.
 const std::vector<int> kRefineLevels = {8, 4};
 constexpr int kSensitivityStepPx = 8;

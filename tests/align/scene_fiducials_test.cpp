@@ -103,6 +103,30 @@ TEST(SceneFiducials, BoardFrameIsRightHandedOnTheRectangle) {
   EXPECT_LT((centre - scene.rectangles[0].centre_mm).norm(), 0.5 / kTargetTexturePxPerMm);
 }
 
+// Alignment needs no sheet: a setup without one is prepared for it (and
+// refused where a sheet is needed), and renders the same picture.
+TEST(SceneFiducials, ASetupWithoutASheetIsPreparedForAlignment) {
+  TempDir dir("align_fiducials");
+  write(dir.file("board.yaml"), kCharuco);
+  std::string text = scene_text("[170, 130]");
+  const std::size_t at = text.find("sheet:");
+  text.erase(at, text.find('\n', at) - at + 1);
+  write(dir.file("scene.yaml"), text);
+  EXPECT_THROW(prepare_scene(dir.file("scene.yaml"), "cam"), InputError);
+  const PreparedScene ps = prepare_scene(dir.file("scene.yaml"), "cam", 4, SceneUse::setup_only);
+  EXPECT_FALSE(ps.scene.sheet.has_value());
+  write(dir.file("with_sheet.yaml"), scene_text("[170, 130]"));
+  const PreparedScene with_sheet = prepare_scene(dir.file("with_sheet.yaml"), "cam", 4);
+  SetupLook look;
+  look.background_radiance = 0.3;
+  look.textures = ps.textures_by_solid();
+  const RigidTransform pose = *ps.camera().camera_from_world;
+  const std::vector<float> a = render_setup(ps.trace, look, ps.camera().model, pose, TraceOptions{}, 1, 0);
+  look.textures = with_sheet.textures_by_solid();
+  const std::vector<float> b = render_setup(with_sheet.trace, look, with_sheet.camera().model, pose, TraceOptions{}, 1, 0);
+  EXPECT_EQ(a, b);
+}
+
 TEST(SceneFiducials, APatternLargerThanItsRectangleIsRefused) {
   TempDir dir("align_fiducials");
   write(dir.file("board.yaml"), kCharuco);
