@@ -72,6 +72,7 @@ CorrectionOperator build_correction_operator(const TransportMap& map, const Shee
     throw std::invalid_argument("correction operator: max_taps_per_axis must be in [1, 256]");
 
   const double inv_k = 1.0 / map.samples_per_axis, inv_mm = 1.0 / grid.mm_per_px;
+  const double sample_share = inv_k * inv_k;
   const int max_taps = options.max_taps_per_axis;
   std::vector<RowEntries> rows(static_cast<std::size_t>(map.height));
   parallel_rows(
@@ -106,7 +107,8 @@ CorrectionOperator build_correction_operator(const TransportMap& map, const Shee
                 const double u = (k + 0.5) / na - 0.5;
                 const double tx = na * nb == 1 ? x : x + u * ax + v * bx;
                 const double ty = na * nb == 1 ? y : y + u * ay + v * by;
-                splat(grid, tx, ty, w * share, share, direct, splats);
+                // A sample is 1/k^2 of its pixel (its weight already is).
+                splat(grid, tx, ty, w * share, share * sample_share, direct, splats);
               }
             }
           }

@@ -22,7 +22,7 @@ namespace glasspiv {
 // build_correction_operator (the footprint taps, the splats, the order of the
 // entries) changes what it produces for the same map, grid and options, so
 // that operators cached by an older build are built again instead of reused.
-inline constexpr std::uint32_t kCorrectionOperatorVersion = 1;
+inline constexpr std::uint32_t kCorrectionOperatorVersion = 2;  // 2: cell pixel counts per sample 1/k^2
 
 // Version of the file layout (header.version); bump it when the layout changes.
 inline constexpr std::uint32_t kCorrectionOperatorFormatVersion = 1;

@@ -38,6 +38,26 @@ TEST(CorrectionOperator, ForwardEqualsTheFootprintFilteredRender) {
   EXPECT_LT(worst, 2e-6);  // float values of A, sums of ~10 terms in [0, 1]
 }
 
+// A pixel traced with k x k samples is still one pixel: the cells' pixel
+// counts (what the masks test) do not grow with the samples. Through the flat
+// window every pixel sees the sheet once, so both sums are the pixel count of
+// the view up to the few pixels whose samples straddle the sheet's edge.
+TEST(CorrectionOperator, PixelCountsDoNotGrowWithTheSamples) {
+  const SceneCameraSetup s = load_scene_camera("flat_window.yaml", 8);
+  const SheetGrid grid = sheet_grid_covering(s.trace.sheet, 0.4);
+  double sums[2] = {0, 0};
+  for (int k = 1; k <= 3; k += 2) {
+    const TransportMap map = build_transport_map(s.trace, s.camera, s.pose, TraceOptions{}, k, 2);
+    const CorrectionOperator op = build_correction_operator(map, grid);
+    double pixels = 0, direct = 0;
+    for (std::size_t c = 0; c < op.cell_pixels.size(); ++c) pixels += op.cell_pixels[c], direct += op.cell_direct_pixels[c];
+    sums[k / 2] = pixels;
+    EXPECT_LE(direct, pixels * (1 + 1e-6));
+  }
+  EXPECT_GT(sums[0], 0);
+  EXPECT_NEAR(sums[1] / sums[0], 1.0, 0.02);
+}
+
 // The same on the reactor, where reflections give several crossings per
 // pixel and magnified views give footprints far below a cell.
 TEST(CorrectionOperator, ForwardEqualsTheRenderThroughTheReactor) {
