@@ -89,11 +89,6 @@ struct Setting {
   bool lsq = false;
   int experiment = 0;  // 0: reactor.yaml (one camera); 1: reactor_5cams.yaml
   int cameras = 1;     // cameras of the experiment used (the reference camera first)
-  // The mask's thresholds scaled for the samples (min_pixels_per_cell x k^2,
-  // min_mean_weight / k^2): the operator counts every sample's crossing as a
-  // whole pixel in cell_pixels and cell_direct_pixels, so with k x k samples the
-  // default thresholds reject cells a 1-sample map keeps.
-  bool mask_per_sample = false;
   bool is_default = false;
 };
 
@@ -248,10 +243,6 @@ class Chain {
     std::vector<CameraOperator> cams;
     for (const CorrectionOperator& op : ops) cams.push_back({&op, 1.0});
     MaskOptions mask;
-    if (st.mask_per_sample) {
-      mask.min_pixels_per_cell *= st.samples * st.samples;
-      mask.min_mean_weight /= st.samples * st.samples;
-    }
     const std::vector<CellState> states = classify_cells(cams, e.trace, mask);
     const bool on_camera = st.grid == GridKind::camera;
     CorrectionOperator direct_op;
@@ -523,9 +514,6 @@ int main(int argc, char** argv) {
     s.label = "3x3 samples";
     s.samples = 3;
     add(s);
-    s.label = "3x3 samples, mask per sample";
-    s.mask_per_sample = true;
-    add(s);
     s = d;
     s.is_default = false;
     s.label = "cut 1e-1";
@@ -563,9 +551,8 @@ int main(int argc, char** argv) {
     add(s);
     s = d;
     s.is_default = false;
-    s.label = "richest: 3x3 (mask per sample), cut 1e-3, lsq";
+    s.label = "richest: 3x3, cut 1e-3, lsq";
     s.samples = 3;
-    s.mask_per_sample = true;
     s.min_weight = 1e-3;
     s.lsq = true;
     add(s);
