@@ -254,6 +254,17 @@ cv::Mat binned_photo(const cv::Mat& photo, int b, int width, int height) {
 
 }  // namespace
 
+std::vector<RefineCorner> refine_corners(const std::vector<FiducialCorner>& corners,
+                                         const std::vector<SceneFiducial>& fiducials,
+                                         const std::vector<int>& rectangle_solids) {
+  std::vector<RefineCorner> out;
+  for (const FiducialCorner& c : corners) {
+    const SceneFiducial& f = fiducials.at(static_cast<std::size_t>(c.fiducial));
+    out.push_back({c.world_mm, rectangle_solids.at(static_cast<std::size_t>(f.rectangle)), c.pixel_px});
+  }
+  return out;
+}
+
 RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, const CameraModel& camera,
                               const RigidTransform& start_camera_from_world, const cv::Mat& photo32f,
                               const RefineParameters& parameters, const RefineOptions& options,

@@ -31,6 +31,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "align/fiducial_detection.h"
 #include "align/model_adjustment.h"
 #include "align/setup_similarity.h"
 #include "calib/camera_model.h"
@@ -78,6 +79,12 @@ struct RefineCorner {
   int solid = 0;
   Eigen::Vector2d pixel_px = Eigen::Vector2d::Zero();
 };
+
+// The fiducial corners found in a photo as refinement corners: each on the
+// solid of its fiducial's rectangle (rectangle_solids: TraceSceneBuildInfo's).
+std::vector<RefineCorner> refine_corners(const std::vector<FiducialCorner>& corners,
+                                         const std::vector<SceneFiducial>& fiducials,
+                                         const std::vector<int>& rectangle_solids);
 
 struct RefineLevel {
   int binning = 1;

@@ -22,11 +22,13 @@
 #include "align/prepared_scene.h"
 #include "align/scene_update.h"
 #include "align/sensitivity.h"
+#include "align/sensitivity_picture.h"
 #include "align/setup_similarity.h"
 #include "apps/cli_checks.h"
 #include "render/scene_yaml.h"
 #include "apps/cli_files.h"
 #include "apps/commands.h"
+#include "apps/png_file.h"
 #include "render/setup_render.h"
 #include "targets/photo_io.h"
 #include "util/atomic_file.h"
@@ -242,13 +244,6 @@ std::string sibling(const std::string& path, const std::string& suffix) {
   return (p.parent_path() / (p.stem().string() + suffix + p.extension().string())).string();
 }
 
-void write_png(const std::string& path, const cv::Mat& image) {
-  write_file_atomically_with(path, [&](const std::string& tmp) {
-    if (!cv::imwrite(tmp, image, {cv::IMWRITE_PNG_COMPRESSION, 3}))
-      throw InputError(path, "", "cannot write the PNG");
-  });
-}
-
 std::vector<float> render_view(const PreparedScene& ps, const CameraModel& model, const RigidTransform& pose,
                                const AlignOptions& o, const char* label) {
   ProgressBar bar(label, static_cast<std::size_t>(model.height_px()));
@@ -358,10 +353,8 @@ void run_refine(const AlignOptions& o) {
   if (!o.no_fiducials) {
     const std::vector<SceneFiducial> fiducials = scene_fiducials(ps.scene);
     if (!fiducials.empty())
-      for (const FiducialCorner& c : detect_fiducials(read_photo_gray8(o.photos.front()), fiducials, o.photos.front()).corners)
-        corners.push_back({c.world_mm,
-                           ps.info.rectangle_solids[static_cast<std::size_t>(fiducials[static_cast<std::size_t>(c.fiducial)].rectangle)],
-                           c.pixel_px});
+      corners = refine_corners(detect_fiducials(read_photo_gray8(o.photos.front()), fiducials, o.photos.front()).corners,
+                               fiducials, ps.info.rectangle_solids);
   }
   std::printf("refining camera '%s' on %s with %zu fiducial corners: levels", ps.camera_name().c_str(),
               o.photos.front().c_str(), corners.size());
@@ -409,26 +402,6 @@ void run_refine(const AlignOptions& o) {
   }
   write_json(o.json, j);
   write_scene_out(o, ps, r.camera_from_world);
-}
-
-// --- align sensitivity ----------------------------------------------------------
-// A heat map of one displacement per grid block at the camera's size: viridis
-// up to the 95th percentile (brighter = more), grey where nothing is measured.
-cv::Mat heat_map(const std::vector<float>& values, const std::vector<unsigned char>& valid, int cols, int rows,
-                 int step_px, double top) {
-  cv::Mat grey(rows, cols, CV_8UC1);
-  for (int r = 0; r < rows; ++r)
-    for (int c = 0; c < cols; ++c)
-      grey.at<unsigned char>(r, c) = static_cast<unsigned char>(
-          std::clamp(255.0 * values[static_cast<std::size_t>(r) * cols + c] / std::max(top, 1e-30), 0.0, 255.0));
-  cv::Mat colour;
-  cv::applyColorMap(grey, colour, cv::COLORMAP_VIRIDIS);
-  for (int r = 0; r < rows; ++r)
-    for (int c = 0; c < cols; ++c)
-      if (!valid[static_cast<std::size_t>(r) * cols + c]) colour.at<cv::Vec3b>(r, c) = cv::Vec3b(90, 90, 90);
-  cv::Mat big;
-  cv::resize(colour, big, cv::Size(cols * step_px, rows * step_px), 0, 0, cv::INTER_NEAREST);
-  return big;
 }
 
 // The 6 x 6 covariance `align pose --json` wrote.
@@ -495,8 +468,8 @@ void run_sensitivity(const AlignOptions& o) {
   std::printf("  %-22s %12.4g %12.4g %12.4g %12.4g\n", "all together", m.median_px, m.p95_px, m.median_mm, m.p95_mm);
   j["total"] = {{"median_px", m.median_px}, {"p95_px", m.p95_px}, {"median_mm", m.median_mm}, {"p95_mm", m.p95_mm}};
   if (m.skipped_glass_meshes) std::printf("  (%d glass meshes kept in place)\n", m.skipped_glass_meshes);
-  write_png(o.output, heat_map(m.displacement_mm, m.valid, m.width, m.height, m.grid_step_px, m.p95_mm));
-  write_png(sibling(o.output, "_px"), heat_map(m.displacement_px, m.valid, m.width, m.height, m.grid_step_px, m.p95_px));
+  write_png(o.output, sensitivity_heat_map(m, m.displacement_mm, m.p95_mm));
+  write_png(sibling(o.output, "_px"), sensitivity_heat_map(m, m.displacement_px, m.p95_px));
   std::printf("wrote %s (sheet point seen by each pixel, mm; yellow = %.3g mm and more) and %s (its image, px; "
               "yellow = %.3g px), grey where no direct view of the sheet\n",
               o.output.c_str(), m.p95_mm, sibling(o.output, "_px").c_str(), m.p95_px);

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/camera_text.h"
+#include "apps/html_text.h"
 #include "apps/plots.h"
 #include "calib/lens_maps.h"
 #include "util/atomic_file.h"
@@ -16,20 +17,6 @@
 namespace glasspiv {
 namespace {
 namespace fs = std::filesystem;
-
-std::string html_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 GridValues coverage_values(const Coverage& c) {
   GridValues g;

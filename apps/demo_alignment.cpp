@@ -16,7 +16,10 @@
 #include "align/prepared_scene.h"
 #include "align/scene_fiducials.h"
 #include "align/sensitivity.h"
+#include "align/sensitivity_picture.h"
 #include "align/setup_similarity.h"
+#include "apps/html_text.h"
+#include "apps/png_file.h"
 #include "render/setup_render.h"
 #include "sim/setup_photo.h"
 #include "util/atomic_file.h"
@@ -42,44 +45,6 @@ DemoPoseError pose_error(const RigidTransform& fitted, const RigidTransform& tru
   const Eigen::AngleAxisd d(fitted.rotation * truth.rotation.transpose());
   return {(fitted.inverse().translation_mm - truth.inverse().translation_mm).norm(),
           std::abs(d.angle()) * 180 / M_PI};
-}
-
-void write_png(const std::string& path, const cv::Mat& image) {
-  write_file_atomically_with(path, [&](const std::string& tmp) {
-    if (!cv::imwrite(tmp, image, {cv::IMWRITE_PNG_COMPRESSION, 3})) throw InputError(path, "", "cannot write the PNG");
-  });
-}
-
-// One displacement per grid block at the camera's size: viridis up to `top`
-// (the 95th percentile), grey where the pixel has no direct view of the sheet.
-cv::Mat heat_map(const SensitivityMap& m, const std::vector<float>& values, double top) {
-  cv::Mat grey(m.height, m.width, CV_8UC1);
-  for (int r = 0; r < m.height; ++r)
-    for (int c = 0; c < m.width; ++c)
-      grey.at<unsigned char>(r, c) = static_cast<unsigned char>(
-          std::clamp(255.0 * values[static_cast<std::size_t>(r) * m.width + c] / std::max(top, 1e-30), 0.0, 255.0));
-  cv::Mat colour;
-  cv::applyColorMap(grey, colour, cv::COLORMAP_VIRIDIS);
-  for (int r = 0; r < m.height; ++r)
-    for (int c = 0; c < m.width; ++c)
-      if (!m.valid[static_cast<std::size_t>(r) * m.width + c]) colour.at<cv::Vec3b>(r, c) = cv::Vec3b(90, 90, 90);
-  cv::Mat big;
-  cv::resize(colour, big, cv::Size(m.width * m.grid_step_px, m.height * m.grid_step_px), 0, 0, cv::INTER_NEAREST);
-  return big;
-}
-
-std::string html_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 std::string file_name(const std::string& path) { return fs::path(path).filename().string(); }
@@ -252,11 +217,7 @@ DemoAlignmentSummary run_alignment_demo(const std::string& folder, const std::st
   s.start_error = pose_error(start, truth);
   RefineOptions refine;
   refine.binning_levels = kRefineLevels;
-  std::vector<RefineCorner> corners;
-  for (const FiducialCorner& c : found.corners)
-    corners.push_back({c.world_mm,
-                       ps.info.rectangle_solids[static_cast<std::size_t>(fiducials[static_cast<std::size_t>(c.fiducial)].rectangle)],
-                       c.pixel_px});
+  const std::vector<RefineCorner> corners = refine_corners(found.corners, fiducials, ps.info.rectangle_solids);
   const RefineResult r = refine_alignment(ps.trace, look, model, start, photo, {}, refine, corners);
   s.refined_error = pose_error(r.camera_from_world, truth);
   s.levels = r.levels;
@@ -296,7 +257,7 @@ DemoAlignmentSummary run_alignment_demo(const std::string& folder, const std::st
     s.sensitivity.push_back({p.name, p.sigma, p.median_px, p.p95_px, p.median_mm, p.p95_mm});
   s.sensitivity.push_back({"all together", 0, m.median_px, m.p95_px, m.median_mm, m.p95_mm});
   s.sensitivity_png = (out / "sensitivity_mm.png").string();
-  write_png(s.sensitivity_png, heat_map(m, m.displacement_mm, m.p95_mm));
+  write_png(s.sensitivity_png, sensitivity_heat_map(m, m.displacement_mm, m.p95_mm));
 
   s.html = write_page(out, s, m.p95_mm);
   s.seconds = total.seconds();

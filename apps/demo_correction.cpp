@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "apps/correction_setup.h"
+#include "apps/png_file.h"
 #include "correct/reconstruct.h"
 #include "render/forward_render.h"
 #include "render/sheet_pattern.h"
@@ -33,12 +34,6 @@ cv::Mat to8(const std::vector<float>& v, int w, int h, double gain) {
   cv::Mat out;
   m.convertTo(out, CV_8U, 255 * gain);
   return out;
-}
-
-void write_png(const std::string& path, const cv::Mat& img) {
-  write_file_atomically_with(path, [&](const std::string& tmp) {
-    if (!cv::imwrite(tmp, img)) throw InputError(path, "", "cannot write the PNG");
-  });
 }
 
 // Images side by side with a grey gutter.

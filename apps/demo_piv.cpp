@@ -11,6 +11,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "apps/correction_setup.h"
+#include "apps/html_text.h"
+#include "apps/png_file.h"
 #include "apps/plots.h"
 #include "correct/reconstruct.h"
 #include "piv/piv_evaluate.h"
@@ -52,12 +54,6 @@ cv::Mat to8(const cv::Mat& m, const cv::Mat& usable = cv::Mat()) {
   return out;
 }
 
-void write_png(const std::string& path, const cv::Mat& image) {
-  write_file_atomically_with(path, [&](const std::string& tmp) {
-    if (!cv::imwrite(tmp, image)) throw InputError(path, "", "cannot write the PNG");
-  });
-}
-
 // RMS and max of |measured - true| over the vectors that are not invalid,
 // whose truth exists and whose window centre is usable (use: empty or per
 // pixel); errors (NaN where not scored) per vector for the plot.
@@ -83,19 +79,6 @@ DemoPivScore score(const PivField& f, const CameraTruth& truth, const cv::Mat& u
   errors->grid.step_y_px = f.grid.rows > 1 ? f.grid.y_px(1) - f.grid.y_px(0) : 1;
   errors->summarize();
   return s;
-}
-
-std::string html_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 std::string file_name(const std::string& path) { return fs::path(path).filename().string(); }
