@@ -161,6 +161,30 @@ struct FitPoint {
   bool outlier = false;
 };
 
+// The outlier rounds' view of the points (calib/fit/outlier_rounds.h), and
+// their verdict applied: dropped points leave the problem, readmitted ones
+// come back through add_block(index).
+std::vector<OutlierCandidate> outlier_candidates(const std::vector<FitPoint>& points) {
+  std::vector<OutlierCandidate> out;
+  for (const FitPoint& f : points) out.push_back({f.residual_px.norm(), f.block == nullptr});
+  return out;
+}
+
+template <typename AddBlock>
+void apply_outlier_verdict(const OutlierVerdict& verdict, ceres::Problem& problem, std::vector<FitPoint>& points,
+                           const AddBlock& add_block) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    FitPoint& f = points[i];
+    if (verdict.outlier[i] && f.block) {
+      problem.RemoveResidualBlock(f.block);
+      f.block = nullptr;
+    } else if (!verdict.outlier[i] && !f.block) {
+      add_block(static_cast<int>(i));
+    }
+    f.outlier = verdict.outlier[i];
+  }
+}
+
 // d(rotation angle vector)/d(rvec) at rvec: the rotation log(R(rvec + d) R(rvec)^T)
 // per unit d, by central differences.
 Eigen::Matrix3d rotation_jacobian(const Eigen::Vector3d& rvec) {
@@ -391,22 +415,9 @@ ExtrinsicFit fit_camera_pose(const CameraModel& camera, const std::vector<PointO
       if (!std::isfinite(v)) refuse("the fit diverged (non-finite pose)");
     update_residuals();
   };
-  const auto candidates = [&] {
-    std::vector<OutlierCandidate> out;
-    for (const FitPoint& f : fit_points) out.push_back({f.residual_px.norm(), f.block == nullptr});
-    return out;
-  };
+  const auto candidates = [&] { return outlier_candidates(fit_points); };
   const auto apply = [&](const OutlierVerdict& verdict) {
-    for (int i = 0; i < n; ++i) {
-      FitPoint& f = fit_points[i];
-      if (verdict.outlier[i] && f.block) {
-        problem.RemoveResidualBlock(f.block);
-        f.block = nullptr;
-      } else if (!verdict.outlier[i] && !f.block) {
-        add_block(f);
-      }
-      f.outlier = verdict.outlier[i];
-    }
+    apply_outlier_verdict(verdict, problem, fit_points, [&](int i) { add_block(fit_points[i]); });
     int inliers = 0;
     for (const FitPoint& f : fit_points) inliers += f.block != nullptr;
     if (inliers < kMinPosePoints)
@@ -700,22 +711,9 @@ RigFit fit_rig(const std::vector<RigCamera>& cameras, const std::vector<RigFiduc
         if (!std::isfinite(b[k])) refuse_rig("observations", "the fit diverged (non-finite pose)");
     update_residuals();
   };
-  const auto candidates = [&] {
-    std::vector<OutlierCandidate> out;
-    for (const FitPoint& f : fit_points) out.push_back({f.residual_px.norm(), f.block == nullptr});
-    return out;
-  };
+  const auto candidates = [&] { return outlier_candidates(fit_points); };
   const auto apply = [&](const OutlierVerdict& verdict) {
-    for (int i = 0; i < n; ++i) {
-      FitPoint& f = fit_points[i];
-      if (verdict.outlier[i] && f.block) {
-        problem.RemoveResidualBlock(f.block);
-        f.block = nullptr;
-      } else if (!verdict.outlier[i] && !f.block) {
-        add_block(i);
-      }
-      f.outlier = verdict.outlier[i];
-    }
+    apply_outlier_verdict(verdict, problem, fit_points, [&](int i) { add_block(i); });
     check_count(" left after outlier rejection");
   };
   fit.rounds = run_outlier_rounds(options.outlier_k, solve, candidates, apply).rounds;
