@@ -45,9 +45,10 @@ struct MarkerPhoto {
   cv::Mat photo;
 };
 
-MarkerPhoto make_setup(const std::string& folder, const MarkerSetupOptions& options, std::uint32_t seed = 1) {
+// The photo of the scene file at `scene_path` from its camera "cam".
+MarkerPhoto photograph(const std::string& scene_path, std::uint32_t seed = 1) {
   MarkerPhoto s;
-  s.ps = prepare_scene(write_marker_setup(folder, options), "cam");
+  s.ps = prepare_scene(scene_path, "cam");
   s.fiducials = scene_fiducials(s.ps.scene);
   s.index = make_scene_index(s.ps.trace);
   SetupLook look;
@@ -60,6 +61,10 @@ MarkerPhoto make_setup(const std::string& folder, const MarkerSetupOptions& opti
   photo.seed = seed;
   s.photo = photo_from_radiance(radiance, model.width_px(), model.height_px(), photo);
   return s;
+}
+
+MarkerPhoto make_setup(const std::string& folder, const MarkerSetupOptions& options) {
+  return photograph(write_marker_setup(folder, options));
 }
 
 std::vector<int> rectangle_solids(const MarkerPhoto& s) { return s.ps.info.rectangle_solids; }
@@ -210,17 +215,8 @@ TEST(AlignPose, AMarkerSeenEdgeOnDoesNotSpoilThePose) {
   ASSERT_NE(at, std::string::npos);
   text.replace(at, std::string("normal: [0, 0, -1]").size(), "normal: [0.99905, 0, -0.0436]");
   write_file_atomically(scene, text);
-  MarkerPhoto s;
-  s.ps = prepare_scene(scene, "cam");
-  s.fiducials = scene_fiducials(s.ps.scene);
-  s.index = make_scene_index(s.ps.trace);
-  SetupLook look;
-  look.background_radiance = 0.35;
-  look.textures = s.ps.textures_by_solid();
+  const MarkerPhoto s = photograph(scene);
   const CameraModel& model = s.ps.camera().model;
-  s.photo = photo_from_radiance(
-      render_setup(s.ps.trace, look, model, *s.ps.camera().camera_from_world, TraceOptions{}, kPhotoSamples, 0),
-      model.width_px(), model.height_px(), PhotoLook{});
   const FiducialsInPhoto found = detect_fiducials(s.photo, s.fiducials, "photo");
   std::printf("edge-on marker: %d corners found on it\n", found.corners_per_fiducial[0]);
   const AlignedPose pose =

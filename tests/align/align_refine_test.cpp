@@ -18,6 +18,35 @@
 namespace glasspiv {
 namespace {
 
+// A marker setup and its photograph at the truth (3 x 3 samples per pixel, one
+// under the sanitizers), through sim/setup_photo.h's blur, vignette and noise.
+struct SetupPhoto {
+  PreparedScene ps;
+  SetupLook look;
+  RigidTransform truth;
+  cv::Mat photo8, photo;  // CV_8UC1, and CV_32FC1 in [0, 1]
+};
+
+SetupPhoto photograph(const std::string& folder, const MarkerSetupOptions& setup) {
+  SetupPhoto s;
+  s.ps = prepare_scene(write_marker_setup(folder, setup), "cam");
+  s.look.background_radiance = s.ps.scene.background.radiance;
+  s.look.textures = s.ps.textures_by_solid();
+  const CameraModel& model = s.ps.camera().model;
+  s.truth = *s.ps.camera().camera_from_world;
+  const std::vector<float> radiance =
+      render_setup(s.ps.trace, s.look, model, s.truth, TraceOptions{}, kSanitizedBuild ? 1 : 3, 0);
+  s.photo8 = photo_from_radiance(radiance, model.width_px(), model.height_px(), PhotoLook{});
+  s.photo8.convertTo(s.photo, CV_32F, 1.0 / 255);
+  return s;
+}
+
+// 2 mm along a skew direction and 1 degree about another, in the camera frame.
+RigidTransform start_offset() {
+  return RigidTransform::from_rvec_tvec(Eigen::Vector3d(0.6, -0.7, 0.4).normalized() * (M_PI / 180),
+                                        Eigen::Vector3d(1.2, 0.9, -1.3).normalized() * 2);
+}
+
 TEST(AlignRefine, AStartOffByTwoMillimetresAndOneDegreeReturnsToTheTruth) {
   // Some 700 renders: hours under the sanitizers; the next test runs the same code there.
   if (kSanitizedBuild) GTEST_SKIP() << "too slow under the sanitizers (tests/sanitized_build.h)";
@@ -27,22 +56,9 @@ TEST(AlignRefine, AStartOffByTwoMillimetresAndOneDegreeReturnsToTheTruth) {
   setup.height_px = 512;
   setup.focal_px = 1250;
   setup.marker_size_mm = 12;  // 30 px
-  const PreparedScene ps = prepare_scene(write_marker_setup(dir.file("setup"), setup), "cam");
-  SetupLook look;
-  look.background_radiance = ps.scene.background.radiance;
-  look.textures = ps.textures_by_solid();
-  const CameraModel& model = ps.camera().model;
-  const RigidTransform truth = *ps.camera().camera_from_world;
-  const std::vector<float> radiance = render_setup(ps.trace, look, model, truth, TraceOptions{}, kSanitizedBuild ? 1 : 3, 0);
-  const cv::Mat photo8 = photo_from_radiance(radiance, model.width_px(), model.height_px(), PhotoLook{});
-  cv::Mat photo;
-  photo8.convertTo(photo, CV_32F, 1.0 / 255);
-
-  // 2 mm along a skew direction and 1 degree about another, in the camera frame.
-  const RigidTransform delta = RigidTransform::from_rvec_tvec(
-      Eigen::Vector3d(0.6, -0.7, 0.4).normalized() * (M_PI / 180), Eigen::Vector3d(1.2, 0.9, -1.3).normalized() * 2);
-  const RigidTransform start = delta * truth;
-  const RefineResult r = refine_alignment(ps.trace, look, model, start, photo);
+  const SetupPhoto s = photograph(dir.file("setup"), setup);
+  const RigidTransform& truth = s.truth;
+  const RefineResult r = refine_alignment(s.ps.trace, s.look, s.ps.camera().model, start_offset() * truth, s.photo);
   const Eigen::AngleAxisd d(r.camera_from_world.rotation * truth.rotation.transpose());
   const double position_mm = (r.camera_from_world.inverse().translation_mm - truth.inverse().translation_mm).norm();
   const double rotation_deg = std::abs(d.angle()) * 180 / M_PI;
@@ -65,29 +81,17 @@ TEST(AlignRefine, WithTheFiducialCornersTheStartReturnsWithinFiftyMicrons) {
   TempDir dir("align_refine");
   MarkerSetupOptions setup;  // 1280 x 1024, 40 px markers, as in align_pose_test
   setup.window_thickness_mm = 10;  // the corners are seen through glass: traced projections
-  const PreparedScene ps = prepare_scene(write_marker_setup(dir.file("setup"), setup), "cam");
-  SetupLook look;
-  look.background_radiance = ps.scene.background.radiance;
-  look.textures = ps.textures_by_solid();
-  const CameraModel& model = ps.camera().model;
-  const RigidTransform truth = *ps.camera().camera_from_world;
-  const std::vector<float> radiance = render_setup(ps.trace, look, model, truth, TraceOptions{}, kSanitizedBuild ? 1 : 3, 0);
-  const cv::Mat photo8 = photo_from_radiance(radiance, model.width_px(), model.height_px(), PhotoLook{});
-  cv::Mat photo;
-  photo8.convertTo(photo, CV_32F, 1.0 / 255);
-  const std::vector<SceneFiducial> fiducials = scene_fiducials(ps.scene);
-  std::vector<RefineCorner> corners;
-  for (const FiducialCorner& c : detect_fiducials(photo8, fiducials, "photo").corners)
-    corners.push_back({c.world_mm,
-                       ps.info.rectangle_solids[static_cast<std::size_t>(fiducials[static_cast<std::size_t>(c.fiducial)].rectangle)],
-                       c.pixel_px});
+  const SetupPhoto s = photograph(dir.file("setup"), setup);
+  const RigidTransform& truth = s.truth;
+  const std::vector<SceneFiducial> fiducials = scene_fiducials(s.ps.scene);
+  const std::vector<RefineCorner> corners =
+      refine_corners(detect_fiducials(s.photo8, fiducials, "photo").corners, fiducials, s.ps.info.rectangle_solids);
   ASSERT_EQ(corners.size(), 80u);
-  const RigidTransform delta = RigidTransform::from_rvec_tvec(
-      Eigen::Vector3d(0.6, -0.7, 0.4).normalized() * (M_PI / 180), Eigen::Vector3d(1.2, 0.9, -1.3).normalized() * 2);
   RefineOptions options;
   options.binning_levels = {16, 8, 4, 2};  // the corners pin the pose: full resolution adds little here
   if (kSanitizedBuild) options.binning_levels = {16};  // the same code on one coarse level
-  const RefineResult r = refine_alignment(ps.trace, look, model, delta * truth, photo, {}, options, corners);
+  const RefineResult r =
+      refine_alignment(s.ps.trace, s.look, s.ps.camera().model, start_offset() * truth, s.photo, {}, options, corners);
   const Eigen::AngleAxisd d(r.camera_from_world.rotation * truth.rotation.transpose());
   const double position_mm = (r.camera_from_world.inverse().translation_mm - truth.inverse().translation_mm).norm();
   const double rotation_deg = std::abs(d.angle()) * 180 / M_PI;
