@@ -4,21 +4,12 @@
 # usage: piv_cli_test.sh GLASSPIV SOURCE_DIR
 set -u
 G=$1
+src=$(cd "$2" && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cd "$work" || exit 1
 
-fail() { echo "FAIL: $*"; echo "--- stdout"; cat out.txt; echo "--- stderr"; cat err.txt; exit 1; }
-# expect STATUS COMMAND...: runs it, output in out.txt / err.txt.
-expect() {
-  local want=$1
-  shift
-  "$@" >out.txt 2>err.txt
-  local got=$?
-  [ "$got" -eq "$want" ] || fail "exit status $got, wanted $want: $*"
-}
-has() { grep -qF -- "$2" "$1" || fail "$1 lacks '$2'"; }
-one_line() { [ "$(wc -l <err.txt)" -eq 1 ] || fail "stderr is not one line"; }
+source "$src/tests/cli_checks.sh"
 
 # frame W H DX DY: a 16-bit ASCII PGM of Gaussian particles (2.5 px, ~0.05
 # per pixel) moved by (DX, DY) px, the same particles for the same seed.

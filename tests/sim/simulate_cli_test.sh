@@ -4,21 +4,12 @@
 set -u
 G=$1
 S=$2/data/scenes/flat_window.yaml
+src=$(cd "$2" && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cd "$work" || exit 1
 
-fail() { echo "FAIL: $*"; echo "--- stdout"; cat out.txt; echo "--- stderr"; cat err.txt; exit 1; }
-expect() {
-  local want=$1
-  shift
-  "$@" >out.txt 2>err.txt
-  local got=$?
-  [ "$got" -eq "$want" ] || fail "exit status $got, wanted $want: $*"
-}
-has() { grep -qF -- "$2" "$1" || fail "$1 lacks '$2'"; }
-one_line() { [ "$(wc -l <err.txt)" -eq 1 ] || fail "stderr is not one line"; }
-nothing_in() { [ ! -e "$1" ] || [ -z "$(ls -A "$1")" ] || fail "$1 is not empty after a refusal"; }
+source "$src/tests/cli_checks.sh"
 
 # --- help
 expect 0 "$G" simulate --help

@@ -4,20 +4,12 @@
 set -u
 G=$1
 D=$2/data/targets
+src=$(cd "$2" && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cd "$work" || exit 1
 
-fail() { echo "FAIL: $*"; echo "--- stdout"; cat out.txt; echo "--- stderr"; cat err.txt; exit 1; }
-# expect STATUS COMMAND...: runs it, output in out.txt / err.txt.
-expect() {
-  local want=$1
-  shift
-  "$@" >out.txt 2>err.txt
-  local got=$?
-  [ "$got" -eq "$want" ] || fail "exit status $got, wanted $want: $*"
-}
-has() { grep -qF -- "$2" "$1" || fail "$1 lacks '$2'"; }
+source "$src/tests/cli_checks.sh"
 
 # --- target show
 expect 0 "$G" target show "$D/charuco_11x8_15mm.yaml"
