@@ -8,6 +8,7 @@
 # Environment:
 #   GLASSPIV_FUZZ_SECONDS  time per harness (default 20)
 #   GLASSPIV_FUZZ_JOBS     parallel fuzzing processes per harness (default 1)
+#   GLASSPIV_FUZZ_PARALLEL harnesses fuzzed at the same time (default: cores / jobs)
 #   GLASSPIV_FUZZ_BUILD_DIR  (default build-fuzz)
 #   GLASSPIV_FUZZ_EXTRA    more libFuzzer flags, e.g. "-dict=... -max_len=4096"
 # A finding (crash, sanitizer report, leak, timeout, out-of-memory, an
@@ -15,8 +16,8 @@
 # reproducer is left in build-fuzz/fuzz-artifacts/<name>/ and printed (base64).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-src=tests/fuzz
-build_dir="${GLASSPIV_FUZZ_BUILD_DIR:-build-fuzz}"
+src="$PWD/tests/fuzz"
+build_dir="$(realpath -m "${GLASSPIV_FUZZ_BUILD_DIR:-build-fuzz}")"
 seconds="${GLASSPIV_FUZZ_SECONDS:-20}"
 jobs="${GLASSPIV_FUZZ_JOBS:-1}"
 cxx="${GLASSPIV_FUZZ_CXX:-clang++-14}"
@@ -51,7 +52,7 @@ cmake --build "$build_dir" --parallel "$(nproc)" --target "${targets[@]}"
 asan_options="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:symbolize=1}"
 # Leaks inside third-party libraries are suppressed (tests/fuzz/lsan.supp); to
 # match them, the image harness needs full malloc stacks.
-export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/$src/lsan.supp}"
+export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$src/lsan.supp}"
 full_malloc_stacks=" image "
 export ASAN_OPTIONS="$asan_options"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
@@ -60,37 +61,41 @@ regress=()
 for h in "${harnesses[@]}"; do regress+=("fuzz_regress.$h"); done
 ctest --test-dir "$build_dir" --output-on-failure --parallel "$(nproc)" \
   -R "^($(IFS='|'; echo "${regress[*]}"))\$"
-status=0
-summary=()
-for h in "${harnesses[@]}"; do
-  work="$build_dir/fuzz-work/$h"
-  artifacts="$build_dir/fuzz-artifacts/$h"
-  log="$build_dir/fuzz-logs/$h.log"
+# One harness: fuzz it, write its summary line to $summary_dir/<name>, and on a
+# finding print the end of its log and the reproducer (base64). Returns 1 on a finding.
+fuzz_one() {
+  local h="$1"
+  local work="$build_dir/fuzz-work/$h"
+  local artifacts="$build_dir/fuzz-artifacts/$h"
+  local log="$build_dir/fuzz-logs/$h.log"
   mkdir -p "$work" "$artifacts" "$(dirname "$log")"
-  corpora=("$src/corpus/$h")
+  local corpora=("$src/corpus/$h")
   [ -d "$src/crashes/$h" ] && corpora+=("$src/crashes/$h")
-  extra=()
+  local extra=()
   [ -f "$src/dict/$h.dict" ] && extra+=(-dict="$src/dict/$h.dict")
   [ "$jobs" -gt 1 ] && extra+=(-jobs="$jobs" -workers="$jobs")
-  export ASAN_OPTIONS="$asan_options"
-  [[ "$full_malloc_stacks" == *" $h "* ]] && export ASAN_OPTIONS="$asan_options:fast_unwind_on_malloc=0"
-  echo "== fuzz_$h: ${seconds} s"
+  local options="$asan_options"
+  [[ "$full_malloc_stacks" == *" $h "* ]] && options="$asan_options:fast_unwind_on_malloc=0"
+  local rc
   set +e
+  # -jobs writes fuzz-<n>.log into the current folder: one folder per harness.
   # shellcheck disable=SC2086
-  "$build_dir/tests/fuzz/fuzz_$h" "$work" "${corpora[@]}" "${extra[@]}" \
+  (cd "$work" && ASAN_OPTIONS="$options" "$build_dir/tests/fuzz/fuzz_$h" . "${corpora[@]}" "${extra[@]}" \
     -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
-    -artifact_prefix="$artifacts/" ${GLASSPIV_FUZZ_EXTRA:-} >"$log" 2>&1
+    -artifact_prefix="$artifacts/" ${GLASSPIV_FUZZ_EXTRA:-} >"$log" 2>&1)
   rc=$?
   set -e
-  [ "$jobs" -gt 1 ] && cat fuzz-*.log >>"$log" 2>/dev/null && rm -f fuzz-*.log
+  if [ "$jobs" -gt 1 ]; then cat "$work"/fuzz-*.log >>"$log" 2>/dev/null || true; rm -f "$work"/fuzz-*.log; fi
+  local last execs speed cov ft
   last=$(grep -E '^#[0-9]+' "$log" | tail -1 || true)
-  execs=$(grep -E 'stat::number_of_executed_units' "$log" | tail -1 | awk '{print $2}')
-  speed=$(grep -E 'stat::average_exec_per_sec' "$log" | tail -1 | awk '{print $2}')
+  execs=$(grep -E 'stat::number_of_executed_units' "$log" | tail -1 | awk '{print $2}' || true)
+  speed=$(grep -E 'stat::average_exec_per_sec' "$log" | tail -1 | awk '{print $2}' || true)
   cov=$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' <<<"$last")
   ft=$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' <<<"$last")
-  summary+=("$(printf '%-22s rc=%-3s execs=%-9s exec/s=%-7s cov=%-6s ft=%s' "$h" "$rc" "${execs:-?}" "${speed:-?}" "${cov:-?}" "${ft:-?}")")
-  if [ "$rc" -ne 0 ]; then
-    status=1
+  printf '%-22s rc=%-3s execs=%-9s exec/s=%-7s cov=%-6s ft=%s\n' "$h" "$rc" "${execs:-?}" "${speed:-?}" \
+    "${cov:-?}" "${ft:-?}" >"$summary_dir/$h"
+  [ "$rc" -eq 0 ] && return 0
+  {
     echo "FINDING in fuzz_$h (exit $rc); the end of its log:"
     tail -n 60 "$log"
     for f in "$artifacts"/*; do
@@ -99,8 +104,28 @@ for h in "${harnesses[@]}"; do
       base64 -w 0 "$f" | head -c 20000
       echo
     done
-  fi
+  } >"$summary_dir/$h.finding"
+  return 1
+}
+
+# Harnesses run side by side, as many at a time as GLASSPIV_FUZZ_PARALLEL
+# (default: the number of cores divided by the processes per harness).
+parallel="${GLASSPIV_FUZZ_PARALLEL:-$(( $(nproc) / jobs > 0 ? $(nproc) / jobs : 1 ))}"
+summary_dir="$build_dir/fuzz-summary"
+rm -rf "$summary_dir" && mkdir -p "$summary_dir"
+echo "== fuzzing ${#harnesses[@]} harnesses, ${seconds} s each, ${parallel} at a time"
+running=0
+for h in "${harnesses[@]}"; do
+  if [ "$running" -ge "$parallel" ]; then wait -n || true; running=$((running - 1)); fi
+  fuzz_one "$h" &
+  running=$((running + 1))
+done
+wait || true
+status=0
+for h in "${harnesses[@]}"; do
+  if [ -f "$summary_dir/$h.finding" ]; then cat "$summary_dir/$h.finding"; status=1; fi
+  [ -f "$summary_dir/$h" ] || { echo "fuzz_$h left no summary"; status=1; }
 done
 echo "== fuzz summary (${seconds} s per harness)"
-printf '%s\n' "${summary[@]}"
+cat "${harnesses[@]/#/$summary_dir/}" 2>/dev/null || true
 exit "$status"
