@@ -9,6 +9,7 @@
 #include "apps/cli_files.h"
 #include "apps/commands.h"
 #include "targets/target_image.h"
+#include "targets/target_pdf.h"
 #include "targets/target_spec.h"
 #include "targets/target_yaml.h"
 #include "util/atomic_file.h"
@@ -18,19 +19,20 @@ namespace glasspiv {
 namespace {
 
 struct PrintOptions {
-  std::string spec, svg, png;
+  std::string spec, page, png;  // page: the -o file, SVG or PDF by its extension
   double dpi = 300;
 };
 
 void run_print(const PrintOptions& o) {
-  if (o.svg.empty() && o.png.empty()) throw InputError("", "-o", "give -o BOARD.svg, --png BOARD.png or both");
-  if (!o.svg.empty() && lower_extension(o.svg) != ".svg")
-    throw InputError(o.svg, "-o", "must end in .svg: glasspiv writes SVG (and PNG with --png), no PDF; convert the "
-                                  "SVG with e.g. rsvg-convert or Inkscape if you need one");
+  if (o.page.empty() && o.png.empty())
+    throw InputError("", "-o", "give -o BOARD.svg (or BOARD.pdf), --png BOARD.png or both");
+  const std::string page_format = o.page.empty() ? "" : lower_extension(o.page);
+  if (!o.page.empty() && page_format != ".svg" && page_format != ".pdf")
+    throw InputError(o.page, "-o", "must end in .svg or .pdf");
   if (!o.png.empty() && lower_extension(o.png) != ".png") throw InputError(o.png, "--png", "must end in .png");
   if (!(o.dpi > 0) || o.dpi > 2400) throw InputError("", "--dpi", fmt::format("must be in (0, 2400], got {:.6g}", o.dpi));
   std::vector<OutputFile> outputs;
-  if (!o.svg.empty()) outputs.push_back({o.svg, "-o"});
+  if (!o.page.empty()) outputs.push_back({o.page, "-o"});
   if (!o.png.empty()) outputs.push_back({o.png, "--png"});
   check_outputs({o.spec}, outputs);
   const TargetSpec spec = read_target_yaml(o.spec);
@@ -38,11 +40,11 @@ void run_print(const PrintOptions& o) {
   // Both drawn into their temporaries first; renamed only when both succeeded,
   // so a failure leaves neither (and no earlier file replaced).
   std::vector<AtomicFileWriter> writers;
-  if (!o.svg.empty()) {
-    const std::string svg = target_svg(spec);
-    writers.push_back({o.svg, [svg, path = o.svg](const std::string& tmp) {
+  if (!o.page.empty()) {
+    const std::string bytes = page_format == ".pdf" ? target_pdf(spec) : target_svg(spec);
+    writers.push_back({o.page, [bytes, path = o.page](const std::string& tmp) {
                          std::ofstream out(tmp, std::ios::binary);
-                         out << svg;
+                         out << bytes;
                          out.flush();
                          if (!out) throw InputError(path, "", "write failed (disk full?)");
                        }});
@@ -50,11 +52,11 @@ void run_print(const PrintOptions& o) {
   if (!o.png.empty())
     writers.push_back({o.png, [&spec, dpi = o.dpi](const std::string& tmp) { write_target_png(tmp, spec, dpi); }});
   write_files_atomically(writers);
-  if (!o.svg.empty()) {
+  if (!o.page.empty()) {
     const Eigen::Vector2d page = target_svg_size_mm(spec);
     std::printf("wrote %s: %.1f x %.1f mm page. Print at 100 %% scale (no \"fit to page\") and check that the bar "
                 "under the board measures 100 mm.\n",
-                o.svg.c_str(), page.x(), page.y());
+                o.page.c_str(), page.x(), page.y());
   }
   if (!o.png.empty()) {
     const Eigen::Vector2d board = board_size_mm(spec);
@@ -115,10 +117,10 @@ void register_target_commands(CLI::App& app) {
 
   auto print = std::make_shared<PrintOptions>();
   CLI::App* p = target->add_subcommand(
-      "print", "Draw a target spec as an SVG at exact scale (caption and 100 mm check bar) and/or a PNG at --dpi. "
-               "SVG and PNG only: no PDF");
+      "print", "Draw a target spec as an SVG or PDF at exact scale (caption and 100 mm check bar) and/or a PNG at "
+               "--dpi");
   p->add_option("spec", print->spec, "Target spec YAML (docs/targets.md)")->required()->check(CLI::ExistingFile);
-  p->add_option("-o,--output", print->svg, "SVG to write (mm units, print at 100 %)");
+  p->add_option("-o,--output", print->page, "SVG or PDF to write, by its extension (exact scale, print at 100 %)");
   p->add_option("--png", print->png, "PNG to write as well (board and margin only)");
   p->add_option("--dpi", print->dpi, "Resolution of the PNG, dots per inch")->capture_default_str();
   p->callback([print] { run_print(*print); });

@@ -8,6 +8,7 @@ packages=(
   libeigen3-dev libopencv-dev libopencv-contrib-dev libapriltag-dev
   libceres-dev libmrcal-dev python3-mrcal python3-numpy
   libyaml-cpp-dev libcli11-dev libfmt-dev nlohmann-json3-dev libpugixml-dev
+  libcairo2-dev libpoppler-cpp-dev  # PDF targets; poppler reads them back in the tests
   libgtest-dev libgmock-dev libtbb-dev
   libembree-dev libopenimageio-dev libassimp-dev libvtk9-dev
 )

@@ -289,50 +289,59 @@ Eigen::Vector2d target_svg_size_mm(const TargetSpec& spec, double margin_mm) {
   return Eigen::Vector2d(content_w + 2 * margin, board.y() + 2 * margin + caption_height_mm(spec));
 }
 
-std::string target_svg(const TargetSpec& spec, double margin_mm) {
+TargetPage target_page(const TargetSpec& spec, double margin_mm) {
   validate_target(spec);
   const double margin = resolve_margin(spec, margin_mm);
   if (!std::isfinite(margin)) throw InputError("", "margin", "must be finite");
-  const Eigen::Vector2d page = target_svg_size_mm(spec, margin);
-  const Eigen::Vector2d board = board_size_mm(spec);
-  const std::vector<std::string> lines = caption_lines(spec);
+  TargetPage page;
+  page.size_mm = target_svg_size_mm(spec, margin);
+  page.title = describe_target(spec);
+  page.font_size_mm = kCaptionFontMm;
+  for (const BoardRect& r : target_black_rects(spec))
+    page.pattern.push_back({r.x0 + margin, r.y0 + margin, r.x1 + margin, r.y1 + margin});
+  // Caption: below the pattern's margin.
+  const double x = margin;
+  double y = board_size_mm(spec).y() + 2 * margin;
+  for (const std::string& line : caption_lines(spec)) {
+    y += kCaptionLineMm;
+    page.caption.push_back({x, y, line});
+  }
+  y += kBarGapMm;
+  page.scale_bar.push_back({x, y, x + kScaleBarMm, y + kBarHeightMm});
+  // Ticks every 10 mm below the bar, the ends longer.
+  for (int k = 0; k <= 10; ++k) {
+    const double tick = 0.3, length = (k == 0 || k == 10) ? kTickMm : kTickMm / 2;
+    const double tx = std::clamp(x + 10.0 * k - tick / 2, x, x + kScaleBarMm - tick);
+    page.scale_bar.push_back({tx, y + kBarHeightMm, tx + tick, y + kBarHeightMm + length});
+  }
+  return page;
+}
 
+std::string target_svg(const TargetSpec& spec, double margin_mm) {
+  const TargetPage page = target_page(spec, margin_mm);
+  const auto rect = [](const BoardRect& r) {
+    return fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/>\n", mm(r.x0), mm(r.y0),
+                       mm(r.x1 - r.x0), mm(r.y1 - r.y0));
+  };
   std::string svg;
   svg += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   svg += fmt::format(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"{}mm\" height=\"{}mm\" "
       "viewBox=\"0 0 {} {}\">\n",
-      mm(page.x()), mm(page.y()), mm(page.x()), mm(page.y()));
-  svg += "<title>" + xml_escape(describe_target(spec)) + "</title>\n";
-  svg += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#ffffff\"/>\n", mm(page.x()),
-                     mm(page.y()));
+      mm(page.size_mm.x()), mm(page.size_mm.y()), mm(page.size_mm.x()), mm(page.size_mm.y()));
+  svg += "<title>" + xml_escape(page.title) + "</title>\n";
+  svg += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#ffffff\"/>\n", mm(page.size_mm.x()),
+                     mm(page.size_mm.y()));
   svg += "<g id=\"pattern\" fill=\"#000000\" stroke=\"none\">\n";
-  for (const BoardRect& r : target_black_rects(spec))
-    svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/>\n", mm(r.x0 + margin), mm(r.y0 + margin),
-                       mm(r.x1 - r.x0), mm(r.y1 - r.y0));
+  for (const BoardRect& r : page.pattern) svg += rect(r);
   svg += "</g>\n";
-
-  // Caption: below the pattern's margin.
-  const double x = margin;
-  double y = board.y() + 2 * margin;
   svg += fmt::format("<g id=\"caption\" font-family=\"sans-serif\" font-size=\"{}\" fill=\"#000000\">\n",
-                     mm(kCaptionFontMm));
-  for (const std::string& line : lines) {
-    y += kCaptionLineMm;
-    svg += fmt::format("<text x=\"{}\" y=\"{}\">{}</text>\n", mm(x), mm(y), xml_escape(line));
-  }
+                     mm(page.font_size_mm));
+  for (const TargetPageText& line : page.caption)
+    svg += fmt::format("<text x=\"{}\" y=\"{}\">{}</text>\n", mm(line.x_mm), mm(line.baseline_mm), xml_escape(line.text));
   svg += "</g>\n";
-  y += kBarGapMm;
   svg += "<g id=\"scale-bar\" fill=\"#000000\" stroke=\"none\">\n";
-  svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/>\n", mm(x), mm(y), mm(kScaleBarMm),
-                     mm(kBarHeightMm));
-  // Ticks every 10 mm below the bar, the ends longer.
-  for (int k = 0; k <= 10; ++k) {
-    const double tick = 0.3, length = (k == 0 || k == 10) ? kTickMm : kTickMm / 2;
-    const double tx = std::clamp(x + 10.0 * k - tick / 2, x, x + kScaleBarMm - tick);
-    svg += fmt::format("<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/>\n", mm(tx), mm(y + kBarHeightMm),
-                       mm(tick), mm(length));
-  }
+  for (const BoardRect& r : page.scale_bar) svg += rect(r);
   svg += "</g>\n</svg>\n";
   return svg;
 }

@@ -1,7 +1,7 @@
 #pragma once
 // Pictures of a target: an 8-bit raster (for PNG printing and for synthesising
-// photos) and an SVG at exact scale for printing. Both draw the same black
-// rectangles, target_black_rects().
+// photos) and the printed page at exact scale, as SVG here and as PDF in
+// targets/target_pdf.h. All draw the same black rectangles, target_black_rects().
 #include <string>
 #include <vector>
 
@@ -47,12 +47,30 @@ struct TargetRender {
 // non-positive resolution or a picture over 500 megapixels.
 TargetRender render_target(const TargetSpec& spec, double px_per_mm, double margin_mm);
 
-// An SVG at exact scale: width and height in mm, viewBox in mm, the pattern as
-// <rect>s, below it a caption (kind, squares, sizes, dictionary, first id,
-// layout) and a 100 mm scale bar to check the print. margin_mm < 0: default.
+// The printed page that target_svg() and write_target_pdf() draw: page mm,
+// origin at the page's top-left corner, y down. The pattern with its white
+// margin, below it a caption (kind, squares, sizes, dictionary, first id,
+// layout) and a 100 mm scale bar with 10 mm ticks to check the print.
+struct TargetPageText {
+  double x_mm = 0, baseline_mm = 0;
+  std::string text;
+};
+struct TargetPage {
+  Eigen::Vector2d size_mm = Eigen::Vector2d::Zero();  // target_svg_size_mm()
+  std::string title;                                   // describe_target()
+  std::vector<BoardRect> pattern;                      // target_black_rects() moved by the margin
+  std::vector<TargetPageText> caption;                 // sans-serif, font_size_mm high
+  double font_size_mm = 0;
+  std::vector<BoardRect> scale_bar;  // the 100 mm bar first, then its ticks
+};
+// margin_mm < 0: default_margin_mm(). Throws InputError for an invalid spec.
+TargetPage target_page(const TargetSpec& spec, double margin_mm = -1);
+
+// An SVG at exact scale of target_page(): width and height in mm, viewBox in
+// mm, the rectangles as <rect>s, the caption as <text>.
 std::string target_svg(const TargetSpec& spec, double margin_mm = -1);
 
-// The SVG page size (width, height) in mm that target_svg() writes.
+// The page size (width, height) in mm of target_page(), the SVG and the PDF.
 Eigen::Vector2d target_svg_size_mm(const TargetSpec& spec, double margin_mm = -1);
 
 // Writers (atomic): the SVG, and a PNG rendered at `dpi` with the default margin.

@@ -42,9 +42,16 @@ has board.svg 'width="180mm" height="159.5mm" viewBox="0 0 180 159.5"'
 has board.svg "print at 100% scale; check: this bar is 100 mm"
 [ -s board.png ] || fail "no board.png"
 expect 0 "$G" target print --help
-has out.txt "no PDF"
-expect 2 "$G" target print "$D/charuco_11x8_15mm.yaml" -o board.pdf
-has err.txt "no PDF"
+has out.txt "SVG or PDF"
+# PDF: the SVG's page (180 x 159.5 mm = 510.236220 x 452.125984 pt); its scale
+# and marks are checked by targets_pdf_test (rendered back by poppler).
+expect 0 "$G" target print "$D/charuco_11x8_15mm.yaml" -o board.pdf --png board2.png
+has out.txt "wrote board.pdf: 180.0 x 159.5 mm page"
+head -c 5 board.pdf | grep -q '%PDF-' || fail "board.pdf is not a PDF"
+grep -aq 'MediaBox \[ 0 0 510.23622 452.12598' board.pdf || fail "board.pdf: wrong page size"
+[ -s board2.png ] || fail "no board2.png beside the PDF"
+expect 2 "$G" target print "$D/charuco_11x8_15mm.yaml" -o board.eps
+has err.txt "must end in .svg or .pdf"
 expect 2 "$G" target print "$D/charuco_11x8_15mm.yaml"
 expect 2 "$G" target print "$D/charuco_11x8_15mm.yaml" --png p.png --dpi 0
 has err.txt "--dpi"
