@@ -17,17 +17,20 @@ constexpr int kFluid = -1;
 
 using Diff = Eigen::Matrix<double, 3, 2>;  // d(vector)/d(pixel col, row)
 
+// Every field is set where a branch is made (the camera ray, child()): the
+// empty constructor keeps the stack's emplace_back from zero-filling it first.
 struct Branch {
-  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();     // exact start of the segment (last hit or camera)
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();     // where the ray is traced from (anchor moved off)
-  Eigen::Vector3d direction = Eigen::Vector3d::Zero();  // unit
-  Diff danchor = Diff::Zero(), ddirection = Diff::Zero();  // ray differentials
-  double weight = 1;
-  int depth = 0;
-  int medium = kFluid;  // kFluid or the index of the solid the branch is in
-  bool any_event = false;
-  bool any_reflection = false;
-  bool initial = false;
+  Branch() {}
+  Eigen::Vector3d anchor;     // exact start of the segment (last hit or camera)
+  Eigen::Vector3d origin;     // where the ray is traced from (anchor moved off)
+  Eigen::Vector3d direction;  // unit
+  Diff danchor, ddirection;   // ray differentials
+  double weight;
+  int depth;
+  int medium;  // kFluid or the index of the solid the branch is in
+  bool any_event;
+  bool any_reflection;
+  bool initial;
 };
 
 CrossingTag tag_of(const Branch& b) {
@@ -52,9 +55,9 @@ Diff transfer(const Branch& b, double u, const Eigen::Vector3d& n) {
 // its two ends are on different sides. Consecutive segments share their end
 // points exactly, so a crossing at a vertex is counted once, never twice or not
 // at all.
-void record_crossing(const SheetPlane& sheet, const Branch& b, const std::optional<Eigen::Vector3d>& end,
+// n is sheet.normal().
+void record_crossing(const SheetPlane& sheet, const Eigen::Vector3d& n, const Branch& b, const Eigen::Vector3d* end,
                      std::vector<SheetCrossing>* out) {
-  const Eigen::Vector3d n = sheet.normal();
   const double dist_a = (b.anchor - sheet.origin_mm).dot(n);
   const bool front_a = dist_a >= 0;
   Eigen::Vector3d x;
@@ -69,10 +72,11 @@ void record_crossing(const SheetPlane& sheet, const Branch& b, const std::option
     x = b.anchor + (-dist_a / dn) * b.direction;
   }
   const Eigen::Vector3d rel = x - sheet.origin_mm;
-  SheetCrossing c;
-  c.s_mm = rel.dot(sheet.s_axis);
-  c.t_mm = rel.dot(sheet.t_axis);
-  if (!(std::abs(c.s_mm) <= 0.5 * sheet.extent_s_mm && std::abs(c.t_mm) <= 0.5 * sheet.extent_t_mm)) return;
+  const double s_mm = rel.dot(sheet.s_axis), t_mm = rel.dot(sheet.t_axis);
+  if (!(std::abs(s_mm) <= 0.5 * sheet.extent_s_mm && std::abs(t_mm) <= 0.5 * sheet.extent_t_mm)) return;
+  SheetCrossing& c = out->emplace_back();
+  c.s_mm = s_mm;
+  c.t_mm = t_mm;
   c.weight = b.weight;
   c.depth = b.depth;
   c.tag = tag_of(b);
@@ -81,7 +85,6 @@ void record_crossing(const SheetPlane& sheet, const Branch& b, const std::option
   const Diff dx = transfer(b, (x - b.anchor).dot(b.direction), n);
   c.dst_dpixel.row(0) = sheet.s_axis.transpose() * dx;
   c.dst_dpixel.row(1) = sheet.t_axis.transpose() * dx;
-  out->push_back(c);
 }
 
 // Reflected direction and its differential: r = d - 2 (d.n) n.
@@ -140,14 +143,19 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
   thread_local Workspace ws;
   std::vector<Branch>& stack = ws.stack;
   stack.clear();
-  Branch first;
+  Branch& first = stack.emplace_back();
   first.anchor = first.origin = ray.origin_mm;
   first.direction = ray.direction / dir_norm;
+  first.danchor.setZero();
   // d(v/|v|) = (I - u u^T) dv / |v|
   first.ddirection = (Eigen::Matrix3d::Identity() - first.direction * first.direction.transpose()) *
                      ray.ddirection_dpixel / dir_norm;
+  first.weight = 1;
+  first.depth = 0;
+  first.medium = kFluid;
+  first.any_event = first.any_reflection = false;
   first.initial = true;
-  stack.push_back(first);
+  const Eigen::Vector3d sheet_normal = scene.sheet.normal();
 
   // Whether a child of this weight and depth is followed; the bookkeeping of
   // the ones that are not. Decided before the child is built, so cut branches
@@ -172,18 +180,20 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
     stack.pop_back();
     ++result.counts.branches_traced;
 
-    std::optional<Hit> hit;
-    if (b.medium == kFluid) {
-      if (b.initial && !index.may_hit(b.origin, b.direction)) {
-        ++result.counts.closed_form;  // nothing to meet: straight to the sheet and the background
-      } else {
-        hit = index.first_hit(b.origin, b.direction, b.initial ? initial_t_min : 0.0);
+    std::optional<Hit> hit = [&]() -> std::optional<Hit> {
+      if (b.medium == kFluid) {
+        if (b.initial && !index.may_hit(b.origin, b.direction)) {
+          ++result.counts.closed_form;  // nothing to meet: straight to the sheet and the background
+          return std::nullopt;
+        }
+        return index.first_hit(b.origin, b.direction, b.initial ? initial_t_min : 0.0);
       }
-    } else {
       // Solids do not overlap: inside one, the next surface is its own.
-      hit = intersect(scene.solids[static_cast<std::size_t>(b.medium)].shape, b.origin, b.direction, 0.0);
-      if (hit) hit->shape_index = b.medium;
-    }
+      std::optional<Hit> h =
+          intersect(scene.solids[static_cast<std::size_t>(b.medium)].shape, b.origin, b.direction, 0.0);
+      if (h) h->shape_index = b.medium;
+      return h;
+    }();
 
     // The medium of this segment, from the geometry of its end: a ray leaving a
     // solid (d . n > 0) was inside it, a ray entering one (d . n < 0) was in the
@@ -199,9 +209,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
     }
 
     if (seg_medium == kFluid) {
-      record_crossing(scene.sheet, b,
-                      hit ? std::optional<Eigen::Vector3d>(hit->point) : std::optional<Eigen::Vector3d>(),
-                      &result.crossings);
+      record_crossing(scene.sheet, sheet_normal, b, hit ? &hit->point : nullptr, &result.crossings);
     } else if (hit) {
       const double alpha = scene.solids[static_cast<std::size_t>(seg_medium)].material.absorption_per_mm;
       if (alpha > 0) {
@@ -276,11 +284,12 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
     const double reflectance = tir ? 1.0 : fr.unpolarized;
 
     auto child = [&]() -> Branch& {
-      Branch& c = stack.emplace_back();
+      Branch& c = stack.emplace_back();  // direction, origin, weight, medium, any_reflection: by the caller
       c.anchor = hit->point;
       c.danchor = dpoint;
       c.depth = b.depth + 1;
       c.any_event = true;
+      c.initial = false;
       return c;
     };
 

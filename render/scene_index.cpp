@@ -18,15 +18,6 @@ Eigen::AlignedBox3d union_bounds(const std::vector<Shape>& shapes) {
   return box;
 }
 
-// Keeps (t, index) lexicographically smallest: the nearest hit, ties to the
-// lower index, whatever order the candidates come in.
-void keep_nearest(std::optional<Hit>&& h, int index, std::optional<Hit>* best) {
-  if (!h) return;
-  if (*best && !(h->t < (*best)->t || (h->t == (*best)->t && index < (*best)->shape_index))) return;
-  h->shape_index = index;
-  *best = std::move(h);
-}
-
 }  // namespace
 
 SceneIndex::SceneIndex(const std::vector<Shape>& shapes) : bounds_(union_bounds(shapes)) {
@@ -70,17 +61,27 @@ struct EmbreeSceneIndex::Impl {
   RTCScene scene = nullptr;
   std::vector<Shape> shapes;
   std::vector<Eigen::AlignedBox3d> padded;
+  // Per solid: its sphere, compact (the common candidate), or nullptr.
+  std::vector<Sphere> spheres;
+  std::vector<const Sphere*> sphere_of;
 };
 
 namespace {
 
+// The nearest candidate so far, (t, index) lexicographically smallest like
+// keep_nearest. A sphere's full hit is built once, for the winner, after the
+// traversal; any other solid's hit is kept as it comes.
 struct QueryContext {
   RTCIntersectContext base;  // first member: Embree hands back a pointer to it
   const std::vector<Shape>* shapes;
+  const std::vector<const Sphere*>* sphere_of;  // per solid: its sphere, or nullptr
   const Eigen::Vector3d* o;
   const Eigen::Vector3d* d;
   double t_min;
-  std::optional<Hit> best;
+  bool have_best = false;
+  double best_t = 0;
+  int best_index = -1;
+  std::optional<Hit> best_other;  // the hit of best_index when it is not a sphere
 };
 
 void solid_bounds(const RTCBoundsFunctionArguments* args) {
@@ -100,12 +101,25 @@ void solid_intersect(const RTCIntersectFunctionNArguments* args) {
   if (!args->valid[0]) return;
   auto* q = reinterpret_cast<QueryContext*>(args->context);
   const int index = static_cast<int>(args->primID);
-  keep_nearest(intersect((*q->shapes)[args->primID], *q->o, *q->d, q->t_min), index, &q->best);
-  if (q->best) {
-    // Let Embree cull candidates beyond the best hit, conservatively (next float up).
-    float& tfar = RTCRayN_tfar(RTCRayHitN_RayN(args->rayhit, args->N), args->N, 0);
-    tfar = std::min(tfar, std::nextafter(static_cast<float>(q->best->t), INFINITY));
+  double t;
+  std::optional<Hit> other;
+  if (const Sphere* sphere = (*q->sphere_of)[args->primID]) {
+    const std::optional<double> ts = sphere_hit_t(*sphere, *q->o, *q->d, q->t_min);
+    if (!ts) return;
+    t = *ts;
+  } else {
+    other = intersect((*q->shapes)[args->primID], *q->o, *q->d, q->t_min);
+    if (!other) return;
+    t = other->t;
   }
+  if (q->have_best && !(t < q->best_t || (t == q->best_t && index < q->best_index))) return;
+  q->have_best = true;
+  q->best_t = t;
+  q->best_index = index;
+  q->best_other = std::move(other);
+  // Let Embree cull candidates beyond the best hit, conservatively (next float up).
+  float& tfar = RTCRayN_tfar(RTCRayHitN_RayN(args->rayhit, args->N), args->N, 0);
+  tfar = std::min(tfar, std::nextafter(static_cast<float>(t), INFINITY));
 }
 
 }  // namespace
@@ -124,6 +138,11 @@ EmbreeSceneIndex::EmbreeSceneIndex(std::vector<Shape> shapes) : SceneIndex(shape
     b.max().array() += pad;
     impl_->padded.push_back(b);
   }
+  for (const Shape& s : impl_->shapes)
+    if (const auto* sphere = std::get_if<Sphere>(&s)) impl_->spheres.push_back(*sphere);
+  std::size_t next_sphere = 0;
+  for (const Shape& s : impl_->shapes)
+    impl_->sphere_of.push_back(std::holds_alternative<Sphere>(s) ? &impl_->spheres[next_sphere++] : nullptr);
   RTCDevice device = embree_device();
   impl_->scene = rtcNewScene(device);
   rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
@@ -151,6 +170,7 @@ std::optional<Hit> EmbreeSceneIndex::first_hit(const Eigen::Vector3d& o, const E
   QueryContext q;
   rtcInitIntersectContext(&q.base);
   q.shapes = &impl_->shapes;
+  q.sphere_of = &impl_->sphere_of;
   q.o = &o;
   q.d = &d;
   q.t_min = t_min;
@@ -170,7 +190,14 @@ std::optional<Hit> EmbreeSceneIndex::first_hit(const Eigen::Vector3d& o, const E
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(impl_->scene, &q.base, &rh);
-  return std::move(q.best);
+  if (!q.have_best) return std::nullopt;
+  std::optional<Hit> best;
+  if (const Sphere* sphere = impl_->sphere_of[static_cast<std::size_t>(q.best_index)])
+    best = sphere_hit(*sphere, o, d, q.best_t);
+  else
+    best = std::move(q.best_other);
+  best->shape_index = q.best_index;
+  return best;
 }
 
 std::unique_ptr<SceneIndex> make_scene_index(std::vector<Shape> shapes) {

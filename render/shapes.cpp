@@ -50,22 +50,51 @@ Box make_slab(const Eigen::Vector3d& centre_mm, const Eigen::Vector3d& normal, d
   return b;
 }
 
-std::optional<Hit> intersect(const Sphere& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min) {
+std::optional<double> sphere_hit_t(const Sphere& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                   double t_min) {
   const Eigen::Vector3d f = o - s.centre_mm;
-  double t0 = 0, t1 = 0;
-  if (!sphere_roots(f, d, s.radius_mm, &t0, &t1)) return std::nullopt;
+  const double r = s.radius_mm;
+  // sphere_roots, with its miss decided before the two square roots where the
+  // line's distance from the centre clearly exceeds r: with l2 > r^2 (1 + 1e-12)
+  // the rounded l = sqrt(l2) is > r (rounding is ~1e-16 relative), so
+  // disc = (r - l)(r + l) < 0 there and sphere_roots would miss as well.
+  const double b = f.dot(d);
+  const Eigen::Vector3d g = f - b * d;
+  const double l2 = g.squaredNorm();
+  if (!(l2 <= (r * r) * (1 + 1e-12))) return std::nullopt;
+  const double l = std::sqrt(l2);  // == g.norm()
+  const double disc = (r - l) * (r + l);
+  if (!(disc > 0)) return std::nullopt;
+  const double sq = std::sqrt(disc);
+  const double q = -(b + std::copysign(sq, b));
+  const double c = f.squaredNorm() - r * r;
+  double t0 = q, t1 = (q != 0) ? c / q : -q;
+  if (t0 > t1) std::swap(t0, t1);
   const double t = t0 > t_min ? t0 : t1;
   if (!(t > t_min)) return std::nullopt;
+  // sphere_hit normalises f + t d: a zero vector (never seen) is a miss.
+  if (!((f + t * d).squaredNorm() > 0)) return std::nullopt;
+  return t;
+}
+
+Hit sphere_hit(const Sphere& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t) {
+  const Eigen::Vector3d f = o - s.centre_mm;
   Hit h;
   h.t = t;
   Eigen::Vector3d radial = f + t * d;
   const double len = radial.norm();
-  if (!(len > 0)) return std::nullopt;
   h.normal = radial / len;
   h.point = s.centre_mm + s.radius_mm * h.normal;  // back onto the sphere (pbrt's reprojection)
-  h.dnormal_dpoint = Eigen::Matrix3d::Identity() / s.radius_mm;
+  // I / r, with one division: 1 / r and 0 / r are exactly what I / r holds.
+  h.dnormal_dpoint.diagonal().setConstant(1.0 / s.radius_mm);
   h.error_mm = error_bound(h.point, inf_norm(s.centre_mm) + s.radius_mm);
   return h;
+}
+
+std::optional<Hit> intersect(const Sphere& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min) {
+  const std::optional<double> t = sphere_hit_t(s, o, d, t_min);
+  if (!t) return std::nullopt;
+  return sphere_hit(s, o, d, *t);
 }
 
 std::optional<Hit> intersect(const Box& b, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min) {

@@ -70,6 +70,12 @@ Box make_slab(const Eigen::Vector3d& centre_mm, const Eigen::Vector3d& normal, d
               double half_extent_mm);
 
 std::optional<Hit> intersect(const Sphere& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min);
+// The sphere's intersect() in two halves, so that a search over many candidates
+// builds the full hit for the winner only: sphere_hit_t is the t intersect()
+// returns (nullopt for its misses), sphere_hit the Hit it returns for that t.
+std::optional<double> sphere_hit_t(const Sphere& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                   double t_min);
+Hit sphere_hit(const Sphere& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t);
 std::optional<Hit> intersect(const Box& b, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min);
 std::optional<Hit> intersect(const Cylinder& c, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min);
 std::optional<Hit> intersect(const Rectangle& r, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min);

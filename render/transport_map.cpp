@@ -30,12 +30,34 @@ struct RowBuffer {
   long camera_rays = 0, branches = 0, no_hit_pixels = 0, unproject_failures = 0;
   long closed_form = 0, cut_by_weight = 0, cut_by_depth = 0, reflections_skipped = 0;
   double cut_weight = 0;
+
+  void clear() {
+    for (auto* v : {&s, &t, &w, &ds_dcol, &ds_drow, &dt_dcol, &dt_drow}) v->clear();
+    tag.clear();
+  }
+  // The crossings of `from`, in arrays of exactly their size (the row waits
+  // for the concatenation: no growth slack).
+  void take_crossings(const RowBuffer& from) {
+    s.assign(from.s.begin(), from.s.end());
+    t.assign(from.t.begin(), from.t.end());
+    w.assign(from.w.begin(), from.w.end());
+    ds_dcol.assign(from.ds_dcol.begin(), from.ds_dcol.end());
+    ds_drow.assign(from.ds_drow.begin(), from.ds_drow.end());
+    dt_dcol.assign(from.dt_dcol.begin(), from.dt_dcol.end());
+    dt_drow.assign(from.dt_drow.begin(), from.dt_drow.end());
+    tag.assign(from.tag.begin(), from.tag.end());
+  }
 };
 
 void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
                const RigidTransform& camera_from_world, const TraceOptions& options, int k, int row,
                RowBuffer* out) {
   thread_local TraceResult r;  // reused: no allocation per ray
+  // The row's crossings grow here, in one buffer per thread that keeps its
+  // capacity from row to row, and are copied to the row once, at their size.
+  thread_local RowBuffer scratch;
+  scratch.clear();
+  RowBuffer* const crossings = &scratch;
   const int width = camera.width_px();
   const double inv_samples = 1.0 / (static_cast<double>(k) * k);
   out->counts.assign(static_cast<std::size_t>(width), 0);
@@ -63,14 +85,14 @@ void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraMod
         out->cut_weight += (r.cut_by_weight_weight + r.cut_by_depth_weight + r.skipped_reflection_weight) * inv_samples;
         if (r.counts.branches_traced > 1 || !r.opaque_hits.empty()) any_hit = true;
         for (const SheetCrossing& c : r.crossings) {
-          out->s.push_back(static_cast<float>(c.s_mm));
-          out->t.push_back(static_cast<float>(c.t_mm));
-          out->w.push_back(static_cast<float>(c.weight * inv_samples));
-          out->tag.push_back(static_cast<std::uint8_t>(c.tag));
-          out->ds_dcol.push_back(static_cast<float>(c.dst_dpixel(0, 0)));
-          out->ds_drow.push_back(static_cast<float>(c.dst_dpixel(0, 1)));
-          out->dt_dcol.push_back(static_cast<float>(c.dst_dpixel(1, 0)));
-          out->dt_drow.push_back(static_cast<float>(c.dst_dpixel(1, 1)));
+          crossings->s.push_back(static_cast<float>(c.s_mm));
+          crossings->t.push_back(static_cast<float>(c.t_mm));
+          crossings->w.push_back(static_cast<float>(c.weight * inv_samples));
+          crossings->tag.push_back(static_cast<std::uint8_t>(c.tag));
+          crossings->ds_dcol.push_back(static_cast<float>(c.dst_dpixel(0, 0)));
+          crossings->ds_drow.push_back(static_cast<float>(c.dst_dpixel(0, 1)));
+          crossings->dt_dcol.push_back(static_cast<float>(c.dst_dpixel(1, 0)));
+          crossings->dt_drow.push_back(static_cast<float>(c.dst_dpixel(1, 1)));
           ++count;
         }
         background += r.background_weight * inv_samples;
@@ -82,9 +104,7 @@ void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraMod
     out->background[static_cast<std::size_t>(col)] = static_cast<float>(background);
     out->opaque[static_cast<std::size_t>(col)] = static_cast<float>(opaque);
   }
-  // The row waits for the concatenation: keep no growth slack.
-  for (auto* v : {&out->s, &out->t, &out->w, &out->ds_dcol, &out->ds_drow, &out->dt_dcol, &out->dt_drow}) v->shrink_to_fit();
-  out->tag.shrink_to_fit();
+  out->take_crossings(scratch);
 }
 
 }  // namespace
