@@ -18,6 +18,8 @@ namespace glasspiv {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Window pairs per batch of DFTs (cross_correlation.h); planes do not depend on it.
+constexpr int kBatchPairs = 16;
 
 // Windows that give no vector: centre pixel unusable or more than half the pixels.
 std::vector<std::uint8_t> masked_windows(const InterrogationGrid& g, const cv::Mat& usable) {
@@ -112,22 +114,34 @@ PivField evaluate_piv(const cv::Mat& frame_a, const cv::Mat& frame_b, const cv::
     total += static_cast<std::size_t>(grids.back().size());
   }
 
-  // Non-finite pixels are unusable and read as zero.
-  cv::Mat a = frame_a.clone(), b = frame_b.clone(), usable(h, w, CV_8U);
+  // Non-finite pixels are unusable and read as zero. Frames with none and no
+  // mask are used as they are (read only), without copies.
   bool any_unusable = false;
-  for (int y = 0; y < h; ++y) {
-    float* pa = a.ptr<float>(y);
-    float* pb = b.ptr<float>(y);
+  for (int y = 0; y < h && !any_unusable; ++y) {
+    const float* pa = frame_a.ptr<float>(y);
+    const float* pb = frame_b.ptr<float>(y);
     const std::uint8_t* m = usable_in.empty() ? nullptr : usable_in.ptr<std::uint8_t>(y);
-    std::uint8_t* o = usable.ptr<std::uint8_t>(y);
-    for (int x = 0; x < w; ++x) {
-      const bool finite = std::isfinite(pa[x]) && std::isfinite(pb[x]);
-      if (!finite) pa[x] = pb[x] = 0;
-      o[x] = finite && (!m || m[x]);
-      any_unusable |= !o[x];
+    bool bad = false;
+    for (int x = 0; x < w; ++x) bad |= !(std::isfinite(pa[x]) && std::isfinite(pb[x])) || (m && !m[x]);
+    any_unusable = bad;
+  }
+  cv::Mat a = frame_a, b = frame_b, usable;
+  if (any_unusable) {
+    a = frame_a.clone();
+    b = frame_b.clone();
+    usable.create(h, w, CV_8U);
+    for (int y = 0; y < h; ++y) {
+      float* pa = a.ptr<float>(y);
+      float* pb = b.ptr<float>(y);
+      const std::uint8_t* m = usable_in.empty() ? nullptr : usable_in.ptr<std::uint8_t>(y);
+      std::uint8_t* o = usable.ptr<std::uint8_t>(y);
+      for (int x = 0; x < w; ++x) {
+        const bool finite = std::isfinite(pa[x]) && std::isfinite(pb[x]);
+        if (!finite) pa[x] = pb[x] = 0;
+        o[x] = finite && (!m || m[x]);
+      }
     }
   }
-  if (!any_unusable) usable.release();
 
   std::atomic<std::size_t> done{0};
   std::size_t done_before = 0;
@@ -154,13 +168,35 @@ PivField evaluate_piv(const cv::Mat& frame_a, const cv::Mat& frame_b, const cv::
     const std::size_t count = static_cast<std::size_t>(g.size());
     std::vector<double> u(count, kNaN), v(count, kNaN), ratio(count, 0.0);
     std::vector<VectorFlag> flags(count, VectorFlag::invalid);
-    std::vector<std::unique_ptr<WindowCorrelator>> correlators(static_cast<std::size_t>(threads));
+    std::vector<std::unique_ptr<BatchCorrelator>> correlators(static_cast<std::size_t>(threads));
     done = 0;
     for_each_row(
         g.rows, threads,
         [&](int row, int thread) {
           auto& corr = correlators[static_cast<std::size_t>(thread)];
-          if (!corr) corr = std::make_unique<WindowCorrelator>(g.window_px);
+          if (!corr) corr = std::make_unique<BatchCorrelator>(g.window_px, kBatchPairs);
+          int cols_of_slots[kBatchPairs];
+          // Peaks of the batch's planes become vectors.
+          auto flush = [&]() {
+            corr->correlate();
+            for (int slot = 0; slot < corr->size(); ++slot) {
+              const int col = cols_of_slots[slot];
+              const std::size_t i = static_cast<std::size_t>(g.index(col, row));
+              const CorrelationPeak peak =
+                  find_correlation_peak(corr->plane(slot), corr->plane_px(), options.peak_exclusion_radius_px);
+              if (!peak.found) continue;
+              double pu = 0, pv = 0;
+              if (pass > 0) {
+                pu = grid_field_at(previous, predictor_u, g.x_px(col), g.y_px(row));
+                pv = grid_field_at(previous, predictor_v, g.x_px(col), g.y_px(row));
+              }
+              u[i] = pu + peak.u_px;
+              v[i] = pv + peak.v_px;
+              ratio[i] = peak.peak_ratio;
+              flags[i] = VectorFlag::valid;
+            }
+            corr->clear();
+          };
           for (int col = 0; col < g.cols; ++col) {
             const std::size_t i = static_cast<std::size_t>(g.index(col, row));
             if (masked[i]) continue;
@@ -168,19 +204,12 @@ PivField evaluate_piv(const cv::Mat& frame_a, const cv::Mat& frame_b, const cv::
             const auto* va = ua.empty() ? nullptr : ua.ptr<std::uint8_t>(y) + x;
             const auto* vb = ub.empty() ? nullptr : ub.ptr<std::uint8_t>(y) + x;
             const int stride = static_cast<int>(da.step1());
-            if (!corr->correlate(da.ptr<float>(y) + x, stride, va, db.ptr<float>(y) + x, stride, vb)) continue;
-            const CorrelationPeak peak = find_correlation_peak(*corr, options.peak_exclusion_radius_px);
-            if (!peak.found) continue;
-            double pu = 0, pv = 0;
-            if (pass > 0) {
-              pu = grid_field_at(previous, predictor_u, g.x_px(col), g.y_px(row));
-              pv = grid_field_at(previous, predictor_v, g.x_px(col), g.y_px(row));
-            }
-            u[i] = pu + peak.u_px;
-            v[i] = pv + peak.v_px;
-            ratio[i] = peak.peak_ratio;
-            flags[i] = VectorFlag::valid;
+            const int slot = corr->add(da.ptr<float>(y) + x, stride, va, db.ptr<float>(y) + x, stride, vb);
+            if (slot < 0) continue;
+            cols_of_slots[slot] = col;
+            if (corr->full()) flush();
           }
+          flush();
           done.fetch_add(static_cast<std::size_t>(g.cols));
         },
         poll);

@@ -1,7 +1,11 @@
-// The three-point fits on sampled Gaussians at known sub-pixel places.
+// The three-point fits on sampled Gaussians at known sub-pixel places, and
+// the integer peak and peak ratio against their definition.
 #include "piv/subpixel_peak.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -62,6 +66,46 @@ TEST(SubpixelPeak, NeighboursWrapAround) {
   EXPECT_NEAR(p.u_px, -0.2, 1e-5);
   std::vector<float> flat(m * m, 0.3f);
   EXPECT_FALSE(find_correlation_peak(flat.data(), m).found);
+}
+
+// The integer peak (first highest sample, row-major) and the peak ratio
+// against the definition written out (second peak: the highest sample at more
+// than the exclusion radius in x or y, distances wrapped), with peaks at the
+// plane's edges, ties, odd sizes and several radii.
+TEST(SubpixelPeak, IntegerPeakAndRatioMatchTheDefinition) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> uni(-0.2f, 0.6f);
+  for (int m : {8, 9, 15, 16, 32}) {
+    for (int trial = 0; trial < 40; ++trial) {
+      std::vector<float> plane(m * m);
+      for (float& v : plane) v = uni(rng);
+      const int r = trial % 3 == 0 ? 0 : trial % 3 == 1 ? m - 1 : static_cast<int>(rng() % m);
+      const int c = trial % 4 == 0 ? m - 1 : trial % 4 == 1 ? 0 : static_cast<int>(rng() % m);
+      plane[r * m + c] = 1.0f;
+      if (trial % 5 == 0) plane[((r + 3) % m) * m + (c + 4) % m] = 1.0f;  // a tie later or earlier in scan order
+      const int e = 1 + trial % 3;
+      int best = 0;
+      for (int i = 1; i < m * m; ++i)
+        if (plane[i] > plane[best]) best = i;
+      const int br = best / m, bc = best % m;
+      const float lowest = *std::min_element(plane.begin(), plane.end());
+      float second = lowest;
+      for (int row = 0; row < m; ++row)
+        for (int col = 0; col < m; ++col) {
+          const int dr = std::abs(row - br), dc = std::abs(col - bc);
+          if (std::min(dr, m - dr) > e || std::min(dc, m - dc) > e) second = std::max(second, plane[row * m + col]);
+        }
+      const CorrelationPeak p = find_correlation_peak(plane.data(), m, e);
+      ASSERT_TRUE(p.found);
+      EXPECT_DOUBLE_EQ(p.u_px, correlation_lag_px(bc, m) + gaussian_peak_offset_px(plane[br * m + (bc + m - 1) % m], 1.0,
+                                                                                     plane[br * m + (bc + 1) % m]));
+      EXPECT_DOUBLE_EQ(p.v_px, correlation_lag_px(br, m) + gaussian_peak_offset_px(plane[((br + m - 1) % m) * m + bc], 1.0,
+                                                                                     plane[((br + 1) % m) * m + bc]));
+      const double span = 1.0 - lowest;
+      EXPECT_DOUBLE_EQ(p.peak_ratio, span / std::max(static_cast<double>(second) - lowest, span / kMaxPeakRatio))
+          << "m " << m << " trial " << trial;
+    }
+  }
 }
 
 }  // namespace
