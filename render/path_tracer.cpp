@@ -41,12 +41,21 @@ CrossingTag tag_of(const Branch& b) {
 // Transfer of the differentials from the segment's start to the point at
 // distance u along it on a plane of normal n (Igehy 1999, eq. 9-10): the
 // footprint of the point where the ray meets that plane.
+// Written out by coefficient: Eigen's packets straddle the 3 x 2 matrix's
+// columns and stall on the stores just made; the sums keep Eigen's order.
 Diff transfer(const Branch& b, double u, const Eigen::Vector3d& n) {
-  const Diff moved = b.danchor + u * b.ddirection;
-  const double dn = b.direction.dot(n);
+  Diff moved;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 3; ++i) moved(i, j) = b.danchor(i, j) + u * b.ddirection(i, j);
+  const Eigen::Vector3d& d = b.direction;
+  const double dn = (d[0] * n[0] + d[1] * n[1]) + d[2] * n[2];
   if (dn == 0) return moved;  // tangent: a miss by convention, never reached with a hit
-  const Eigen::RowVector2d du = -(n.transpose() * moved) / dn;
-  return moved + b.direction * du;
+  Diff out;
+  for (int j = 0; j < 2; ++j) {
+    const double du = -((n[0] * moved(0, j) + n[1] * moved(1, j)) + n[2] * moved(2, j)) / dn;
+    for (int i = 0; i < 3; ++i) out(i, j) = moved(i, j) + d[i] * du;
+  }
+  return out;
 }
 
 // Records the crossing of the sheet by the segment from b.anchor along
@@ -107,8 +116,12 @@ Diff refraction_differential(const Eigen::Vector3d& d, const Diff& dd, const Eig
   return eta * dd + m * (eta * dc - dcos_t) + (eta * c - cos_t) * dm;
 }
 
+// The branch being followed lives in one of two slots; its refracted child is
+// built in the other and followed next, without a trip through the stack
+// (the stack would hand it straight back: it is pushed last).
 struct Workspace {
   std::vector<Branch> stack;
+  Branch slot[2];
 };
 
 }  // namespace
@@ -143,7 +156,9 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
   thread_local Workspace ws;
   std::vector<Branch>& stack = ws.stack;
   stack.clear();
-  Branch& first = stack.emplace_back();
+  int current = 0;
+  bool have_current = true;  // slot[current] holds the next branch to follow
+  Branch& first = ws.slot[current];
   first.anchor = first.origin = ray.origin_mm;
   first.direction = ray.direction / dir_norm;
   first.danchor.setZero();
@@ -175,9 +190,14 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
     return true;
   };
 
-  while (!stack.empty()) {
-    Branch b = std::move(stack.back());
-    stack.pop_back();
+  while (true) {
+    if (!have_current) {
+      if (stack.empty()) break;
+      ws.slot[current] = stack.back();
+      stack.pop_back();
+    }
+    have_current = false;
+    Branch& b = ws.slot[current];
     ++result.counts.branches_traced;
 
     std::optional<Hit> hit = [&]() -> std::optional<Hit> {
@@ -283,8 +303,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
     if (tir) ++result.counts.tir_events;
     const double reflectance = tir ? 1.0 : fr.unpolarized;
 
-    auto child = [&]() -> Branch& {
-      Branch& c = stack.emplace_back();  // direction, origin, weight, medium, any_reflection: by the caller
+    auto child = [&](Branch& c) -> Branch& {  // direction, origin, weight, medium, any_reflection: by the caller
       c.anchor = hit->point;
       c.danchor = dpoint;
       c.depth = b.depth + 1;
@@ -302,7 +321,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
         result.skipped_reflection_weight += w_reflected;
       }
     } else if (admit(w_reflected, b.depth + 1)) {
-      Branch& r = child();
+      Branch& r = child(stack.emplace_back());
       reflect_with_differential(b.direction, b.ddirection, normal, dnormal, &r.direction, &r.ddirection);
       r.origin = spawn_origin(*hit, r.direction, seg_medium == kFluid);
       r.weight = w_reflected;
@@ -310,7 +329,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
       r.any_reflection = true;
     }
     if (refracted && admit(w_refracted, b.depth + 1)) {
-      Branch& t = child();
+      Branch& t = child(ws.slot[1 - current]);
       t.direction = *refracted;
       const Eigen::Vector3d facing = ndn < 0 ? normal : Eigen::Vector3d(-normal);
       const Diff dfacing = ndn < 0 ? dnormal : Diff(-dnormal);
@@ -319,6 +338,8 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
       t.weight = w_refracted;
       t.medium = other_medium;
       t.any_reflection = b.any_reflection;
+      current = 1 - current;
+      have_current = true;
     }
   }
 }
