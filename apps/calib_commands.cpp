@@ -91,6 +91,36 @@ void add_fit_options(CLI::App* app, FitCliOptions& o) {
       ->check(CLI::ExistingFile);
 }
 
+// Which projection uncertainty the command prints and the report shows.
+struct UncertaintyCliOptions {
+  std::string method = "board-frames";
+  std::string distance = "1000";  // mm, or "inf"
+  UncertaintyMethod to_method() const { return uncertainty_method_from_name(method); }
+  double distance_mm() const { return distance == "inf" ? kAtInfinity : std::strtod(distance.c_str(), nullptr); }
+};
+
+void add_uncertainty_options(CLI::App* app, UncertaintyCliOptions& o) {
+  app->add_option("--uncertainty", o.method,
+                  "Projection uncertainty: board-frames (mrcal's: through the intrinsics and the board poses) or "
+                  "intrinsics-only (the intrinsics' covariance, the point fixed in the camera frame)")
+      ->check(CLI::IsMember({"board-frames", "intrinsics-only"}))
+      ->capture_default_str();
+  app->add_option("--uncertainty-distance-mm", o.distance,
+                  "Distance of the point whose projection uncertainty is shown (mm, 1e-3 to 1e12), or inf")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            if (text == "inf") return "";
+            char* end = nullptr;
+            const double value = std::strtod(text.c_str(), &end);
+            if (text.empty() || end == text.c_str() || *end != '\0' || !std::isfinite(value))
+              return "'" + text + "' is not a finite number or inf";
+            if (!(value >= 1e-3 && value <= 1e12)) return "'" + text + "' is outside [0.001, 1e+12]";
+            return "";
+          },
+          "NUMBER in [0.001, 1e+12] or inf"))
+      ->capture_default_str();
+}
+
 bool is_observations_file(const std::string& path) {
   const std::string ext = fs::path(path).extension().string();
   return ext == ".yaml" || ext == ".yml" || ext == ".json";
@@ -103,12 +133,13 @@ struct FitOutcome {
 };
 
 // The fit, then the cross-validation when both halves have enough views.
-FitOutcome fit_with_diagnostics(const Observations& observations, const IntrinsicFitOptions& options) {
+FitOutcome fit_with_diagnostics(const Observations& observations, const IntrinsicFitOptions& options,
+                                UncertaintyMethod method) {
   ProgressBar bar("fitting", 2);
   FitOutcome out{fit_intrinsics(observations, options), std::nullopt, ""};
   bar.advance();
   try {
-    out.cross_validation = cross_validation(observations, options);
+    out.cross_validation = cross_validation(observations, options, 64, method);
   } catch (const InputError& e) {
     out.cross_validation_note = e.problem();
   }
@@ -122,7 +153,7 @@ std::string figure(double value, const char* unit = " px") {
   return std::isfinite(value) ? fmt::format("{:.4f}{}", value, unit) : std::string("not defined");
 }
 
-void print_fit(const FitOutcome& o) {
+void print_fit(const FitOutcome& o, const UncertaintyCliOptions& u) {
   const IntrinsicFit& f = o.fit;
   std::printf("fit: RMS %s over %d corners (%d outliers dropped), %d views%s; %.2f s\n", figure(f.rms_px).c_str(),
               f.inlier_count, f.outlier_count, static_cast<int>(f.view_rms_px.size() - f.skipped_views.size()),
@@ -132,24 +163,27 @@ void print_fit(const FitOutcome& o) {
   std::printf("     fx %.6g  fy %.6g  cx %.6g  cy %.6g px  distortion [%s]\n", m.fx_px(), m.fy_px(), m.cx_px(),
               m.cy_px(), fmt::format("{:.6g}", fmt::join(m.distortion(), ", ")).c_str());
   if (f.intrinsics_covariance.size() > 0) {
-    const UncertaintyFigures u = uncertainty_figures(f, 1000.0);
-    double worst = -1;
-    int no_ray = 0;
-    for (double c : u.corners_px) {
-      if (std::isfinite(c))
-        worst = std::max(worst, c);
-      else
-        ++no_ray;
-    }
-    std::string corners = worst >= 0 ? figure(worst) : std::string("not defined");
-    if (no_ray > 0) corners += fmt::format(" (the fitted model has no ray at {} of the 4 image corners)", no_ray);
-    std::printf("     projection uncertainty (1 sigma): centre %s, worst corner %s\n", figure(u.centre_px).c_str(),
-                corners.c_str());
+    const double distance_mm = u.distance_mm();
+    const UncertaintyFigures figures = uncertainty_figures(f, distance_mm, u.to_method());
+    std::string centre = figures.centre_status == UncertaintyStatus::ok
+                             ? figure(figures.centre_px)
+                             : fmt::format("not defined ({})", to_string(figures.centre_status));
+    std::string corners = figures.undefined_corners() < 4 ? figure(figures.worst_corner_px()) : "not defined";
+    std::vector<std::string> missing;
+    for (int i = 0; i < 4; ++i)
+      if (figures.corner_status[i] != UncertaintyStatus::ok) missing.push_back(UncertaintyFigures::kCornerNames[i]);
+    if (!missing.empty())
+      corners += fmt::format(" (the fitted model has no ray at {} of the 4 image corners: {})", missing.size(),
+                             fmt::join(missing, ", "));
+    std::printf("     projection uncertainty (1 sigma, %s, %s): centre %s, worst corner %s\n", u.method.c_str(),
+                std::isinf(distance_mm) ? "at infinity" : fmt::format("at {:g} mm", distance_mm).c_str(),
+                centre.c_str(), corners.c_str());
   }
   if (o.cross_validation)
-    std::printf("     cross-validation: even vs odd views differ by %s RMS (%s the noise's %s)\n",
-                figure(o.cross_validation->difference.rms_px).c_str(), figure(o.cross_validation->ratio, "x").c_str(),
-                figure(o.cross_validation->expected.rms_px).c_str());
+    std::printf("     cross-validation: even vs odd views differ by %s RMS%s (%s the noise's %s)\n",
+                figure(o.cross_validation->difference.rms_px).c_str(),
+                o.cross_validation->method == UncertaintyMethod::board_frames ? " after the implied rotation" : "",
+                figure(o.cross_validation->ratio, "x").c_str(), figure(o.cross_validation->expected.rms_px).c_str());
   else
     std::printf("     cross-validation: not possible (%s)\n", o.cross_validation_note.c_str());
 }
@@ -160,6 +194,7 @@ struct IntrinsicsOptions {
   double pixel_pitch_um = 0;
   bool no_report = false;
   FitCliOptions fit;
+  UncertaintyCliOptions uncertainty;
 };
 
 std::string report_dir_for(const IntrinsicsOptions& o) {
@@ -206,8 +241,9 @@ void run_intrinsics(const IntrinsicsOptions& o) {
     }
   }
   const IntrinsicFitOptions options = o.fit.to_options(observations);
-  const FitOutcome outcome = naming_file(source, [&] { return fit_with_diagnostics(observations, options); });
-  print_fit(outcome);
+  const FitOutcome outcome =
+      naming_file(source, [&] { return fit_with_diagnostics(observations, options, o.uncertainty.to_method()); });
+  print_fit(outcome, o.uncertainty);
 
   Camera camera{o.name.empty() ? fs::path(o.output).stem().string() : o.name, outcome.fit.camera, std::nullopt,
                 std::nullopt};
@@ -219,7 +255,8 @@ void run_intrinsics(const IntrinsicsOptions& o) {
     const CalibrationReportFiles files = naming_file(source, [&] {
       return write_calibration_report(
           dir, {observations, options, outcome.fit, outcome.cross_validation ? &*outcome.cross_validation : nullptr,
-                camera.name, camera.pixel_pitch_um, std::nullopt});
+                camera.name, camera.pixel_pitch_um, std::nullopt, o.uncertainty.distance_mm(),
+                o.uncertainty.to_method()});
     });
     std::printf("wrote %s and %s\n", files.html.c_str(), files.metrics_json.c_str());
   }
@@ -229,20 +266,23 @@ struct ReportOptions {
   std::string observations, output_dir, name;
   double pixel_pitch_um = 0;
   FitCliOptions fit;
+  UncertaintyCliOptions uncertainty;
 };
 
 void run_report(const ReportOptions& o) {
   check_calib_outputs({o.observations, o.fit.initial_camera}, {{o.output_dir, "-o"}});
   const Observations observations = read_observations(o.observations);
   const IntrinsicFitOptions options = o.fit.to_options(observations);
-  const FitOutcome outcome = naming_file(o.observations, [&] { return fit_with_diagnostics(observations, options); });
-  print_fit(outcome);
+  const FitOutcome outcome = naming_file(
+      o.observations, [&] { return fit_with_diagnostics(observations, options, o.uncertainty.to_method()); });
+  print_fit(outcome, o.uncertainty);
   const CalibrationReportFiles files = naming_file(o.observations, [&] {
     return write_calibration_report(
         o.output_dir,
         {observations, options, outcome.fit, outcome.cross_validation ? &*outcome.cross_validation : nullptr,
          o.name.empty() ? "camera" : o.name,
-         o.pixel_pitch_um > 0 ? std::optional<double>(o.pixel_pitch_um) : std::nullopt, std::nullopt});
+         o.pixel_pitch_um > 0 ? std::optional<double>(o.pixel_pitch_um) : std::nullopt, std::nullopt,
+         o.uncertainty.distance_mm(), o.uncertainty.to_method()});
   });
   std::printf("wrote %s and %s\n", files.html.c_str(), files.metrics_json.c_str());
 }
@@ -270,6 +310,7 @@ void register_calib_commands(CLI::App& app) {
   i->add_option("--pixel-pitch-um", in->pixel_pitch_um, "Sensor pixel size in um (for DaVis output; 0.1 to 1000)")
       ->check(finite_range(0.1, 1000));
   add_fit_options(i, in->fit);
+  add_uncertainty_options(i, in->uncertainty);
   i->callback([in] { run_intrinsics(*in); });
 
   auto rep = std::make_shared<ReportOptions>();
@@ -282,6 +323,7 @@ void register_calib_commands(CLI::App& app) {
   r->add_option("--pixel-pitch-um", rep->pixel_pitch_um, "Sensor pixel size in um (0.1 to 1000)")
       ->check(finite_range(0.1, 1000));
   add_fit_options(r, rep->fit);
+  add_uncertainty_options(r, rep->uncertainty);
   r->callback([rep] { run_report(*rep); });
 }
 

@@ -6,6 +6,8 @@
 #include <filesystem>
 
 #include <fmt/format.h>
+#include <Eigen/Geometry>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "apps/camera_text.h"
@@ -24,6 +26,40 @@ GridValues coverage_values(const Coverage& c) {
   for (int n : c.count) g.vector_px.emplace_back(static_cast<double>(n), 0.0);
   g.summarize();
   return g;
+}
+
+// A figure for the page: never "nan" or "inf".
+std::string px(double value) { return std::isfinite(value) ? fmt::format("{:.4f} px", value) : "no figure"; }
+
+nlohmann::json number_or_null(double value) { return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr); }
+
+std::string distance_text(double distance_mm) {
+  return std::isinf(distance_mm) ? std::string("at infinity") : fmt::format("at {:g} mm", distance_mm);
+}
+
+// "centre 0.1353 px; corners 0.31 px (top-left), ..., no figure at the
+// bottom-right (the fitted model has no ray through this pixel)".
+std::string uncertainty_text(const UncertaintyFigures& u) {
+  std::string out = u.centre_status == UncertaintyStatus::ok
+                        ? fmt::format("centre {:.4f} px", u.centre_px)
+                        : fmt::format("no figure at the centre ({})", to_string(u.centre_status));
+  std::vector<std::string> corners, missing;
+  for (int i = 0; i < 4; ++i) {
+    if (u.corner_status[i] == UncertaintyStatus::ok)
+      corners.push_back(fmt::format("{:.4f} px ({})", u.corners_px[i], UncertaintyFigures::kCornerNames[i]));
+    else
+      missing.push_back(fmt::format("{} ({})", UncertaintyFigures::kCornerNames[i], to_string(u.corner_status[i])));
+  }
+  if (!corners.empty()) out += "; corners " + fmt::format("{}", fmt::join(corners, ", "));
+  if (!missing.empty())
+    out += fmt::format("; no figure at {} of the 4 corners: {}", missing.size(), fmt::join(missing, ", "));
+  return out;
+}
+
+// "12 of 1813 samples have no figure (grey): ..." or "".
+std::string missing_samples_text(const GridValues& g, const char* why) {
+  const int missing = g.grid.size() - g.valid_count;
+  return missing > 0 ? fmt::format(" {} of {} samples have no figure (grey): {}.", missing, g.grid.size(), why) : "";
 }
 
 double parameter_sigma(const IntrinsicFit& fit, int index) {
@@ -63,22 +99,43 @@ CalibrationReportFiles write_calibration_report(const std::string& folder, const
                       add("coverage.png", "Corners per cell. Grey or dark regions are extrapolated by the model, "
                                           "not measured: photograph the board there too."));
   std::optional<UncertaintyFigures> uncertainty;
+  std::optional<GridValues> sigma;
+  const std::string uncertainty_kind =
+      fmt::format("{}, {}", uncertainty_method_name(in.uncertainty_method), distance_text(in.uncertainty_distance_mm));
   if (in.fit.intrinsics_covariance.size() > 0) {
-    const GridValues sigma = projection_uncertainty(in.fit, in.uncertainty_distance_mm, step);
-    uncertainty = uncertainty_figures(in.fit, in.uncertainty_distance_mm);
-    write_magnitude_png(sigma, w, h, {"projection uncertainty (1 sigma, worst direction)", "sigma px"},
-                        add("uncertainty.png", "How far a projected point can move given the observation noise "
-                                               "(1 sigma, worst direction), from the covariance of the intrinsics."));
+    sigma = projection_uncertainty(in.fit, in.uncertainty_distance_mm, step, in.uncertainty_method);
+    uncertainty = uncertainty_figures(in.fit, in.uncertainty_distance_mm, in.uncertainty_method);
+    const std::string how =
+        in.uncertainty_method == UncertaintyMethod::board_frames
+            ? "propagated through the intrinsics and the board poses to a point defined through the board frames "
+              "(mrcal's method)"
+            : "from the covariance of the intrinsics alone, the point held fixed in the camera frame";
+    write_magnitude_png(*sigma, w, h,
+                        {fmt::format("projection uncertainty (1 sigma, worst direction; {})", uncertainty_kind),
+                         "sigma px"},
+                        add("uncertainty.png",
+                            "How far a projected point can move given the observation noise (1 sigma, worst "
+                            "direction), " +
+                                how + "." +
+                                missing_samples_text(*sigma, "the fitted model has no ray through those pixels")));
   }
   const GridValues distortion = distortion_field(model, step);
   write_vector_field_png(distortion, w, h, {"distortion of the fitted model (distorted - pinhole pixel)", "|distortion| px"},
                          add("distortion.png", "The fitted lens distortion."));
   if (in.cross_validation) {
+    const bool rotated = in.cross_validation->method == UncertaintyMethod::board_frames;
     write_magnitude_png(in.cross_validation->difference, w, h,
-                        {"cross-validation: even views vs odd views", "|difference| px"},
-                        add("cross_validation.png", "Projection difference of the models fitted to the even- and the "
-                                                    "odd-numbered views. Compare with the uncertainty map: much larger "
-                                                    "means the lens model or the data are not good enough."));
+                        {std::string("cross-validation: even views vs odd views") +
+                             (rotated ? " after the implied rotation" : ""),
+                         "|difference| px"},
+                        add("cross_validation.png",
+                            std::string("Projection difference of the models fitted to the even- and the "
+                                        "odd-numbered views") +
+                                (rotated ? ", after the camera rotation implied between them" : "") +
+                                ". Much larger than expected from the noise means the lens model or the data "
+                                "are not good enough." +
+                                missing_samples_text(in.cross_validation->difference,
+                                                     "one of the two models has no ray through those pixels")));
   }
   std::optional<GridValues> truth_diff, truth_diff_rotated;
   if (in.truth) {
@@ -116,20 +173,46 @@ CalibrationReportFiles write_calibration_report(const std::string& folder, const
                       {"sigma", std::isfinite(sigma) ? nlohmann::json(sigma) : nlohmann::json(nullptr)}});
   }
   j["parameters"] = params;
-  if (uncertainty)
-    j["projection_uncertainty_px"] = {{"distance_mm", in.uncertainty_distance_mm},
-                                      {"centre", uncertainty->centre_px},
-                                      {"corners", uncertainty->corners_px}};
+  if (uncertainty) {
+    nlohmann::json corners = nlohmann::json::object(), undefined = nlohmann::json::array();
+    if (uncertainty->centre_status != UncertaintyStatus::ok)
+      undefined.push_back({{"pixel", "centre"}, {"reason", to_string(uncertainty->centre_status)}});
+    for (int i = 0; i < 4; ++i) {
+      corners[UncertaintyFigures::kCornerNames[i]] = number_or_null(uncertainty->corners_px[i]);
+      if (uncertainty->corner_status[i] != UncertaintyStatus::ok)
+        undefined.push_back(
+            {{"pixel", UncertaintyFigures::kCornerNames[i]}, {"reason", to_string(uncertainty->corner_status[i])}});
+    }
+    j["projection_uncertainty_px"] = {
+        {"method", uncertainty_method_name(in.uncertainty_method)},
+        {"distance_mm", number_or_null(in.uncertainty_distance_mm)},
+        {"at_infinity", std::isinf(in.uncertainty_distance_mm)},
+        {"noise_sigma_px",
+         in.uncertainty_method == UncertaintyMethod::board_frames ? in.fit.residual_std_px : in.fit.sigma_px},
+        {"centre", number_or_null(uncertainty->centre_px)},
+        {"corners", corners},
+        {"without_figure", undefined},
+        {"map", {{"rms", number_or_null(sigma->rms_px)},
+                 {"max", number_or_null(sigma->max_px)},
+                 {"samples", sigma->grid.size()},
+                 {"samples_without_figure", sigma->grid.size() - sigma->valid_count}}}};
+  }
   if (in.cross_validation)
-    j["cross_validation"] = {{"difference_rms_px", in.cross_validation->difference.rms_px},
-                             {"difference_max_px", in.cross_validation->difference.max_px},
-                             {"expected_rms_px", in.cross_validation->expected.rms_px},
-                             {"ratio", in.cross_validation->ratio}};
+    j["cross_validation"] = {
+        {"method", uncertainty_method_name(in.cross_validation->method)},
+        {"implied_rotation_mrad",
+         1e3 * Eigen::AngleAxisd(in.cross_validation->odd_from_even.rotation).angle()},
+        {"difference_rms_px", number_or_null(in.cross_validation->difference.rms_px)},
+        {"difference_max_px", number_or_null(in.cross_validation->difference.max_px)},
+        {"expected_rms_px", number_or_null(in.cross_validation->expected.rms_px)},
+        {"ratio", number_or_null(in.cross_validation->ratio)},
+        {"samples_without_figure",
+         in.cross_validation->difference.grid.size() - in.cross_validation->difference.valid_count}};
   if (truth_diff)
-    j["truth"] = {{"projection_difference_rms_px", truth_diff->rms_px},
-                  {"projection_difference_max_px", truth_diff->max_px},
-                  {"projection_difference_after_implied_rotation_rms_px", truth_diff_rotated->rms_px},
-                  {"projection_difference_after_implied_rotation_max_px", truth_diff_rotated->max_px}};
+    j["truth"] = {{"projection_difference_rms_px", number_or_null(truth_diff->rms_px)},
+                  {"projection_difference_max_px", number_or_null(truth_diff->max_px)},
+                  {"projection_difference_after_implied_rotation_rms_px", number_or_null(truth_diff_rotated->rms_px)},
+                  {"projection_difference_after_implied_rotation_max_px", number_or_null(truth_diff_rotated->max_px)}};
   nlohmann::json views = nlohmann::json::array();
   for (std::size_t v = 0; v < in.observations.views.size(); ++v)
     views.push_back({{"source", in.observations.views[v].source},
@@ -159,31 +242,34 @@ CalibrationReportFiles write_calibration_report(const std::string& folder, const
   page += "<h2>Camera</h2>\n<pre>" + html_escape(describe_camera(camera)) + "</pre>\n";
 
   page += "<h2>Fit</h2>\n<table>\n";
-  page += fmt::format("<tr><td>RMS residual (inliers)</td><td>{:.4f} px</td></tr>\n", in.fit.rms_px);
-  page += fmt::format("<tr><td>noise estimate &sigma; per axis</td><td>{:.4f} px</td></tr>\n", in.fit.sigma_px);
+  page += fmt::format("<tr><td>RMS residual (inliers)</td><td>{}</td></tr>\n", px(in.fit.rms_px));
+  page += fmt::format("<tr><td>noise estimate &sigma; per axis</td><td>{}</td></tr>\n", px(in.fit.sigma_px));
   page += fmt::format("<tr><td>corners used / dropped as outliers</td><td>{} / {}</td></tr>\n", in.fit.inlier_count,
                       in.fit.outlier_count);
   page += fmt::format("<tr><td>outlier threshold</td><td>{} &sigma;</td></tr>\n", in.options.outlier_k);
   page += fmt::format("<tr><td>solver</td><td>{} rounds, {} iterations, {:.3f} s, {}</td></tr>\n", in.fit.rounds,
                       in.fit.iterations, in.fit.total_time_s, html_escape(in.fit.termination));
   if (uncertainty)
+    page += fmt::format("<tr><td>projection uncertainty (1&sigma;, worst direction; {})</td><td>{}</td></tr>\n",
+                        html_escape(uncertainty_kind), html_escape(uncertainty_text(*uncertainty)));
+  if (in.cross_validation) {
+    const CrossValidation& cv = *in.cross_validation;
+    const std::string rotation =
+        cv.method == UncertaintyMethod::board_frames
+            ? fmt::format(" after the implied rotation ({:.3f} mrad)",
+                          1e3 * Eigen::AngleAxisd(cv.odd_from_even.rotation).angle())
+            : std::string(" (intrinsics only)");
     page += fmt::format(
-        "<tr><td>projection uncertainty (1&sigma;)</td><td>centre {:.4f} px; corners {:.4f}, {:.4f}, {:.4f}, {:.4f} "
-        "px</td></tr>\n",
-        uncertainty->centre_px, uncertainty->corners_px[0], uncertainty->corners_px[1], uncertainty->corners_px[2],
-        uncertainty->corners_px[3]);
-  if (in.cross_validation)
-    page += fmt::format(
-        "<tr><td>cross-validation (even vs odd views)</td><td>RMS {:.4f} px, max {:.4f} px; expected from noise "
-        "{:.4f} px; ratio <span class=\"{}\">{:.2f}</span></td></tr>\n",
-        in.cross_validation->difference.rms_px, in.cross_validation->difference.max_px,
-        in.cross_validation->expected.rms_px, in.cross_validation->ratio > 3 ? "bad" : "",
-        in.cross_validation->ratio);
+        "<tr><td>cross-validation (even vs odd views{})</td><td>RMS {}, max {}; expected from noise "
+        "{}; ratio <span class=\"{}\">{}</span></td></tr>\n",
+        html_escape(rotation), px(cv.difference.rms_px), px(cv.difference.max_px), px(cv.expected.rms_px),
+        cv.ratio > 3 ? "bad" : "", std::isfinite(cv.ratio) ? fmt::format("{:.2f}", cv.ratio) : "no figure");
+  }
   if (truth_diff)
     page += fmt::format(
-        "<tr><td>projection difference to the true camera</td><td>RMS {:.4f} px, max {:.4f} px; after the implied "
-        "rotation RMS {:.4f} px, max {:.4f} px</td></tr>\n",
-        truth_diff->rms_px, truth_diff->max_px, truth_diff_rotated->rms_px, truth_diff_rotated->max_px);
+        "<tr><td>projection difference to the true camera</td><td>RMS {}, max {}; after the implied "
+        "rotation RMS {}, max {}</td></tr>\n",
+        px(truth_diff->rms_px), px(truth_diff->max_px), px(truth_diff_rotated->rms_px), px(truth_diff_rotated->max_px));
   page += "</table>\n";
 
   page += "<h2>Parameters</h2>\n<table>\n<tr><th>parameter</th><th>value</th><th>1&sigma;</th>";

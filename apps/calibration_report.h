@@ -2,7 +2,9 @@
 // The calibration report: an HTML page with the pictures (residual field,
 // coverage, projection uncertainty, distortion, cross-validation) and the numbers
 // (parameters with their 1-sigma, RMS, outliers, per-view residuals), plus a
-// metrics JSON. Written into one folder, every file atomically.
+// metrics JSON. Written into one folder, every file atomically. No figure is
+// ever printed as "nan": a pixel without one is named with the reason
+// (the fitted model has no ray there), and counted on the maps.
 #include <optional>
 #include <string>
 
@@ -21,7 +23,8 @@ struct CalibrationReportInputs {
   std::string camera_name;
   std::optional<double> pixel_pitch_um;
   std::optional<Camera> truth;  // synthetic sessions: the camera the photos were made with
-  double uncertainty_distance_mm = 1000;
+  double uncertainty_distance_mm = 1000;  // kAtInfinity for a point at infinity
+  UncertaintyMethod uncertainty_method = UncertaintyMethod::board_frames;
 };
 
 struct CalibrationReportFiles {

@@ -214,6 +214,22 @@ constexpr double kInconsistentRmsPx = 10;
 
 }  // namespace
 
+Eigen::MatrixXd StateCovariance::dense() const {
+  const int m = static_cast<int>(intrinsics.rows()), n = static_cast<int>(views.size());
+  Eigen::MatrixXd out(m + kPoseParameterCount * n, m + kPoseParameterCount * n);
+  out.topLeftCorner(m, m) = intrinsics;
+  for (int v = 0; v < n; ++v) {
+    const Eigen::MatrixXd cross = -intrinsics * pose_from_intrinsics[v].transpose();
+    out.block(0, m + 6 * v, m, 6) = cross;
+    out.block(m + 6 * v, 0, 6, m) = cross.transpose();
+    for (int w = 0; w < n; ++w)
+      out.block(m + 6 * v, m + 6 * w, 6, 6) =
+          pose_from_intrinsics[v] * intrinsics * pose_from_intrinsics[w].transpose() +
+          (v == w ? pose_alone[v] : Eigen::Matrix<double, 6, 6>::Zero());
+  }
+  return out;
+}
+
 std::string intrinsic_name(int index) {
   static const char* names[] = {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2",    "k3",
                                 "k4", "k5", "k6", "s1", "s2", "s3", "s4", "tau_x", "tau_y"};
@@ -542,6 +558,13 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
   fit.outlier_count = outliers;
   fit.rms_px = std::sqrt(sum_squares / inliers);
   fit.sigma_px = std::sqrt(sum_squares / degrees_of_freedom);
+  {
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    for (const FitCorner& c : corners)
+      if (views[c.slot].active && c.block) sum += c.residual_px;
+    const double mean = sum.sum() / (2.0 * inliers);
+    fit.residual_std_px = std::sqrt(std::max(0.0, sum_squares / (2.0 * inliers) - mean * mean));
+  }
 
   // --- Observability: the focal length's 1-sigma from the marginal covariance.
   int active_views = 0;
@@ -580,8 +603,22 @@ IntrinsicFit fit_intrinsics(const Observations& observations, const IntrinsicFit
   // estimated sigma. (ceres::Covariance gives the same matrix on well-scaled
   // problems, see the tests, but its SuiteSparseQR rank test is not scale
   // invariant: it declares long lenses rank deficient and logs to stderr.)
-  if (options.compute_uncertainty)
+  if (options.compute_uncertainty) {
     fit.intrinsics_covariance = check.covariance * (fit.sigma_px * fit.sigma_px) / (check_sigma * check_sigma);
+    StateCovariance& state = fit.state_covariance;
+    state.intrinsics = check.covariance / (check_sigma * check_sigma);
+    std::size_t block = 0;  // the eliminated blocks are the active views in order
+    for (const UsedView& v : views) {
+      if (!v.active) continue;
+      if (block >= check.eliminated_inverse.size() || check.eliminated_inverse[block].rows() != kPoseParameterCount)
+        throw InputError("", "views", "the covariance of the board poses could not be evaluated");
+      state.views.push_back(v.view);
+      state.camera_from_board.push_back(v.pose);
+      state.pose_alone.push_back(check.eliminated_inverse[block]);
+      state.pose_from_intrinsics.push_back(check.eliminated_from_kept[block]);
+      ++block;
+    }
+  }
 
   // --- The result.
   if (aspect_ratio > 0) intrinsics[1] = aspect_ratio * intrinsics[0];

@@ -21,6 +21,7 @@
 //
 // Throws InputError (file "", field "views" or the offending option) for input
 // that cannot give a calibration; never returns non-finite parameters.
+#include <array>
 #include <optional>
 #include <string>
 #include <utility>
@@ -65,6 +66,27 @@ struct ObservationResidual {
   int corner_id = 0;                                      // CornerObservation::id
   Eigen::Vector2d residual_px = Eigen::Vector2d::Zero();  // projected - observed
   bool outlier = false;                                   // dropped by the outlier loop
+};
+
+// The joint covariance of the fit's full state, the free intrinsics theta and
+// every used view's pose P_v (its 6 Ceres parameters: angle-axis rad, then
+// translation mm), at unit noise (multiply by the noise variance). Kept in the
+// factored form of the Schur complement (calib/fit/marginal_covariance.h):
+// with J^T J = [[A, B], [B^T, C]] and S = A - B C^-1 B^T,
+//   Cov(theta)      = S^+
+//   Cov(theta, P_v) = -S^+ K_v^T                       K_v = C_v^-1 B_v^T
+//   Cov(P_v, P_w)   = delta_vw C_v^-1 + K_v S^+ K_w^T
+// mrcal's projection uncertainty propagates this through the board frames
+// (calib/fit/calibration_diagnostics.h).
+struct StateCovariance {
+  Eigen::MatrixXd intrinsics;                            // S^+ (free_intrinsics order)
+  std::vector<int> views;                                // the input view of each pose block
+  std::vector<std::array<double, 6>> camera_from_board;  // each pose's parameters as fitted
+  std::vector<Eigen::Matrix<double, 6, 6>> pose_alone;   // C_v^-1
+  std::vector<Eigen::MatrixXd> pose_from_intrinsics;     // K_v: 6 x free intrinsics
+  bool empty() const { return views.empty(); }
+  // The whole matrix: theta first, then the poses in `views` order.
+  Eigen::MatrixXd dense() const;
 };
 
 struct SkippedView {
@@ -112,6 +134,14 @@ struct IntrinsicFit {
   // marginalised; computed as the inverse of the Schur complement of the poses
   // in J^T J (Jacobi-scaled). Empty unless compute_uncertainty.
   Eigen::MatrixXd intrinsics_covariance;
+  // The intrinsics and the board poses jointly (see StateCovariance), at unit
+  // noise. Empty unless compute_uncertainty.
+  StateCovariance state_covariance;
+  // mrcal's noise estimate: the standard deviation of all inlier residual
+  // components (x and y together, their mean removed, divided by 2n), as
+  // mrcal.projection_uncertainty takes it. Below sigma_px by the factor
+  // sqrt((2n - p) / 2n) (a few % on small sets).
+  double residual_std_px = 0;
   // 1-sigma of fx from the observability check (always computed; with
   // sigma_px floored at kObservabilitySigmaFloorPx).
   double fx_sigma_px = 0;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 #include <numeric>
+#include <utility>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -25,16 +26,24 @@ void gather_rows(const ceres::CRSMatrix& jacobian, int row, int n, int kept_colu
     }
 }
 
-// Jk^T Jk - B (Je^T Je)^-1 B^T with B = Jk^T Je; the common 6-value pose block
-// with a fixed-size factorisation.
-Eigen::MatrixXd schur_term(const Eigen::MatrixXd& jk, const Eigen::MatrixXd& je) {
+// Jk^T Jk - B (Je^T Je)^-1 B^T with B = Jk^T Je; also (Je^T Je)^-1 and
+// K = (Je^T Je)^-1 B^T. The common 6-value pose block with a fixed-size
+// factorisation.
+Eigen::MatrixXd schur_term(const Eigen::MatrixXd& jk, const Eigen::MatrixXd& je, Eigen::MatrixXd* inverse,
+                           Eigen::MatrixXd* from_kept) {
   const Eigen::MatrixXd b = jk.transpose() * je;
   if (je.cols() == 6) {
     const Eigen::Matrix<double, 6, 6> ee = je.transpose() * je;
-    return jk.transpose() * jk - b * ee.ldlt().solve(b.transpose());
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt = ee.ldlt();
+    *inverse = ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity());
+    *from_kept = ldlt.solve(b.transpose());
+  } else {
+    const Eigen::MatrixXd ee = je.transpose() * je;
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt = ee.ldlt();
+    *inverse = ldlt.solve(Eigen::MatrixXd::Identity(ee.rows(), ee.cols()));
+    *from_kept = ldlt.solve(b.transpose());
   }
-  const Eigen::MatrixXd ee = je.transpose() * je;
-  return jk.transpose() * jk - b * ee.ldlt().solve(b.transpose());
+  return jk.transpose() * jk - b * *from_kept;
 }
 
 }  // namespace
@@ -53,13 +62,15 @@ MarginalCovariance marginal_covariance(const ceres::CRSMatrix& jacobian, int kep
     return out;
 
   Eigen::MatrixXd s = Eigen::MatrixXd::Zero(m, m);
+  std::vector<Eigen::MatrixXd> eliminated_inverse(eliminated_columns.size()),
+      eliminated_from_kept(eliminated_columns.size());
   int row = 0, column = m;
   for (std::size_t b = 0; b < eliminated_columns.size(); ++b) {
     const int n = eliminated_rows[b];
     if (n > 0) {
       Eigen::MatrixXd jk = Eigen::MatrixXd::Zero(n, m), je = Eigen::MatrixXd::Zero(n, eliminated_columns[b]);
       gather_rows(jacobian, row, n, m, column, &jk, &je);
-      s += schur_term(jk, je);
+      s += schur_term(jk, je, &eliminated_inverse[b], &eliminated_from_kept[b]);
       row += n;
     }
     column += eliminated_columns[b];
@@ -84,7 +95,12 @@ MarginalCovariance marginal_covariance(const ceres::CRSMatrix& jacobian, int kep
   inverse_lambda.head(undetermined).setZero();
   const Eigen::MatrixXd inverse = eigen.eigenvectors() * inverse_lambda.asDiagonal() * eigen.eigenvectors().transpose();
   out.covariance = sigma_px * sigma_px * d.asDiagonal() * inverse * d.asDiagonal();
-  if (!out.covariance.allFinite() || (out.covariance.diagonal().array() < 0).any()) out.covariance.resize(0, 0);
+  if (!out.covariance.allFinite() || (out.covariance.diagonal().array() < 0).any()) {
+    out.covariance.resize(0, 0);
+    return out;
+  }
+  out.eliminated_inverse = std::move(eliminated_inverse);
+  out.eliminated_from_kept = std::move(eliminated_from_kept);
   return out;
 }
 

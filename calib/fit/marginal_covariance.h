@@ -37,6 +37,15 @@ struct MarginalCovariance {
   Eigen::MatrixXd covariance;       // of the kept parameters; empty when S has no positive eigenvalue
   double reciprocal_condition = 0;  // lambda_min / lambda_max of D S D
   Eigen::MatrixXd undetermined;     // unit (scaled) eigenvectors of the undetermined directions
+  // Per eliminated block b, what the joint covariance of all parameters needs
+  // besides `covariance` (with J^T J = [[A, B], [B^T, C]], C block diagonal):
+  // C_b^-1 and K_b = C_b^-1 B_b^T, how block b's best values follow the kept
+  // parameters (a shift d of them moves block b by -K_b d). Then, at unit noise,
+  //   Cov(kept, block b)    = -S^+ K_b^T
+  //   Cov(block b, block c) = delta_bc C_b^-1 + K_b S^+ K_c^T.
+  // Empty for a block without rows.
+  std::vector<Eigen::MatrixXd> eliminated_inverse;      // C_b^-1, unit noise
+  std::vector<Eigen::MatrixXd> eliminated_from_kept;    // K_b (block columns x kept columns)
 };
 
 // The Jacobian's layout (a ceres::Problem::Evaluate in the tangent space): the

@@ -77,10 +77,12 @@ ceres::CostFunction* create_reprojection_cost(LensModel lens_model, const Eigen:
 
 // The pixel of a camera-frame point and its derivative with respect to the
 // intrinsics block (2 x (4 + distortion count), the functor's first block), with
-// the same aspect-ratio tie. Returns false if the point is not in front of the
-// camera. `intrinsics` holds 4 + distortion count values.
+// the same aspect-ratio tie, and (if asked) with respect to the point. Returns
+// false if the point is not in front of the camera. `intrinsics` holds 4 +
+// distortion count values.
 bool project_with_intrinsics_jacobian(LensModel lens_model, const double* intrinsics, double aspect_ratio,
                                       const Eigen::Vector3d& point_camera, Eigen::Vector2d* pixel,
-                                      Eigen::MatrixXd* d_pixel_d_intrinsics);
+                                      Eigen::MatrixXd* d_pixel_d_intrinsics,
+                                      Eigen::Matrix<double, 2, 3>* d_pixel_d_point = nullptr);
 
 }  // namespace glasspiv

@@ -8,9 +8,12 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <sys/wait.h>
+
+#include <nlohmann/json.hpp>
 
 #include "sim/calibration_views.h"
 #include "truth_cameras.h"
@@ -164,6 +167,50 @@ TEST(CalibCommands, FitErrorsNameTheFileAndCeresIsSilent) {
   EXPECT_EQ(ok.status, 0) << ok.err;
   EXPECT_EQ(ok.out.find("nan"), std::string::npos) << ok.out;
   EXPECT_EQ(ok.err.find("WARNING"), std::string::npos) << ok.err;
+}
+
+// "nan" or "inf" as a word: a figure printed without a value.
+bool has_non_finite_figure(const std::string& text) {
+  static const std::regex word(R"((^|[^A-Za-z_])(nan|-nan|inf|-inf)([^A-Za-z_]|$))", std::regex::icase);
+  return std::regex_search(text, word);
+}
+
+// A lens whose distortion folds inside the image (k1 = -0.5 at fx = 1000 px:
+// the largest distorted radius is 544 px, the image corners are 1101 px from
+// the centre): the fitted model has no ray at the corners and the edges, as on
+// a fisheye set. Every figure the user reads names those pixels instead of
+// printing "nan": the command's output, report.html and metrics.json.
+TEST(CalibCommands, PixelsWithoutARayAreNamedNotNan) {
+  const fs::path dir = fresh_dir("fold");
+  const CameraModel truth(1920, 1080, 1000, 1000, 959.5, 539.5, {-0.5, 0, 0, 0});
+  ViewPlan plan;
+  plan.min_fill = 0.25;
+  plan.max_fill = 0.4;
+  plan.centre_spread = 0.35;
+  std::mt19937 rng(7);
+  const Observations obs = observe_board(truth, {}, plan_views(truth, {}, plan, rng), 0.1, rng);
+  write_observations((dir / "fold.yaml").string(), obs);
+  const CommandRun run = glasspiv(dir, {"calib", "report", "fold.yaml", "-o", "rep", "--lens-model", "opencv4"});
+  ASSERT_EQ(run.status, 0) << run.out << run.err;
+  EXPECT_FALSE(has_non_finite_figure(run.out)) << run.out;
+  EXPECT_NE(run.out.find("the fitted model has no ray at 4 of the 4 image corners: top-left, top-right, "
+                         "bottom-left, bottom-right"),
+            std::string::npos)
+      << run.out;
+  const std::string html = slurp(dir / "rep" / "report.html"), json_text = slurp(dir / "rep" / "metrics.json");
+  EXPECT_FALSE(has_non_finite_figure(html));
+  EXPECT_NE(html.find("no figure at 4 of the 4 corners: top-left (the fitted model has no ray through this pixel)"),
+            std::string::npos);
+  EXPECT_NE(html.find("samples have no figure (grey)"), std::string::npos);
+  EXPECT_FALSE(has_non_finite_figure(json_text));
+  const nlohmann::json metrics = nlohmann::json::parse(json_text);
+  const nlohmann::json& u = metrics.at("projection_uncertainty_px");
+  EXPECT_TRUE(u.at("centre").is_number());
+  ASSERT_EQ(u.at("without_figure").size(), 4u);
+  EXPECT_EQ(u.at("without_figure")[0].at("pixel"), "top-left");
+  EXPECT_TRUE(u.at("corners").at("bottom-right").is_null());
+  EXPECT_GT(u.at("map").at("samples_without_figure").get<int>(), 0);
+  EXPECT_LT(u.at("map").at("samples_without_figure").get<int>(), u.at("map").at("samples").get<int>());
 }
 
 }  // namespace
