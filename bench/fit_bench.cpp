@@ -17,6 +17,11 @@
 // start-up excluded). Each first on
 // one thread, then with the default threads (glasspiv num_threads = 0, OpenCV's
 // default cv::setNumThreads; mrcal is single-threaded).
+//
+// Then the projection uncertainty's cost on the default fit (its state
+// covariance comes with the fit): one pixel, and the report's map (samples
+// about max(w, h) / 48 px apart), for mrcal's board-frames method and the
+// intrinsics-only one, with the centre's 1-sigma at infinity.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -36,6 +41,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/core/utility.hpp>
 
+#include "calib/fit/calibration_diagnostics.h"
 #include "calib/fit/intrinsic_fit.h"
 #include "calib/lens_maps.h"
 #include "mrcal_peer.h"
@@ -71,7 +77,32 @@ struct Row {
 };
 
 
-void bench_lens(const Lens& lens, int runs) {
+struct UncertaintyRow {
+  std::string lens, method;
+  double centre_px = 0, pixel_us = 0, map_ms = 0;
+  int samples = 0;
+};
+
+// The uncertainty's cost on `fit`, single thread (the computation has no threads).
+std::vector<UncertaintyRow> bench_uncertainty(const char* lens, const IntrinsicFit& fit, int runs) {
+  std::vector<UncertaintyRow> out;
+  const Eigen::Vector2d centre((fit.camera.width_px() - 1) / 2.0, (fit.camera.height_px() - 1) / 2.0);
+  const double step = std::max(fit.camera.width_px(), fit.camera.height_px()) / 48.0;
+  for (const UncertaintyMethod method : {UncertaintyMethod::board_frames, UncertaintyMethod::intrinsics_only}) {
+    UncertaintyRow r{lens, uncertainty_method_name(method)};
+    constexpr int kPixels = 200;
+    r.pixel_us = 1e6 / kPixels * best_seconds(runs, [&] {
+                   for (int i = 0; i < kPixels; ++i) r.centre_px = projection_uncertainty_at(fit, centre, kAtInfinity, method);
+                 });
+    GridValues map;
+    r.map_ms = 1e3 * best_seconds(runs, [&] { map = projection_uncertainty(fit, kAtInfinity, step, method); });
+    r.samples = map.grid.size();
+    out.push_back(r);
+  }
+  return out;
+}
+
+std::vector<UncertaintyRow> bench_lens(const Lens& lens, int runs) {
   const LensModel model = lens.truth.lens_model();
   SyntheticBoard board;
   std::mt19937 rng(2);
@@ -89,12 +120,14 @@ void bench_lens(const Lens& lens, int runs) {
   bare.compute_uncertainty = false;
   IntrinsicFitOptions defaults;
   defaults.lens_model = model;
+  std::optional<IntrinsicFit> default_fit;
   for (int threads : {1, 0}) {
     for (const IntrinsicFitOptions* options : {&bare, &defaults}) {
       IntrinsicFitOptions o = *options;
       o.num_threads = threads;
       std::optional<IntrinsicFit> fit;
       const double t = best_seconds(runs, [&] { fit = fit_intrinsics(obs, o); });
+      if (options == &defaults && threads == 1) default_fit = fit;
       rows.push_back({options == &bare ? "glasspiv fit_intrinsics (no outlier loop, no covariance)"
                                        : "glasspiv fit_intrinsics (defaults: outlier loop, covariance)",
                       threads == 1 ? "1" : "default (" + std::to_string(std::thread::hardware_concurrency()) + ")", t,
@@ -134,6 +167,7 @@ void bench_lens(const Lens& lens, int runs) {
                 r.implementation.c_str(), r.threads.c_str(), 1e3 * r.seconds, opencv_row->seconds / r.seconds, r.rms_px,
                 r.rms_px - opencv_row->rms_px, diff);
   }
+  return bench_uncertainty(lens.name, *default_fit, runs);
 }
 
 }  // namespace
@@ -165,6 +199,15 @@ int main(int argc, char** argv) {
       {"opencv5", testing::truth_opencv5()},
       {"opencv8", testing::truth_opencv8()},
   };
-  for (const Lens& lens : lenses) bench_lens(lens, runs);
+  std::vector<UncertaintyRow> uncertainty;
+  for (const Lens& lens : lenses)
+    for (const UncertaintyRow& r : bench_lens(lens, runs)) uncertainty.push_back(r);
+  std::printf(
+      "\nprojection uncertainty on the default fit, at infinity, single thread: one pixel, and the report's map\n\n"
+      "| lens    | method          | centre 1-sigma px | one pixel us | map ms | map samples |\n"
+      "|---------|-----------------|------------------:|-------------:|-------:|------------:|\n");
+  for (const UncertaintyRow& r : uncertainty)
+    std::printf("| %-7s | %-15s | %17.4f | %12.1f | %6.1f | %11d |\n", r.lens.c_str(), r.method.c_str(), r.centre_px,
+                r.pixel_us, r.map_ms, r.samples);
   return 0;
 }
