@@ -11,6 +11,7 @@
 #include "apps/calibration_report.h"
 #include "apps/commands.h"
 #include "apps/photo_detection.h"
+#include "calib/fit/multi_start.h"
 #include "calib/io/camera_file.h"
 #include "targets/observations_io.h"
 #include "targets/target_yaml.h"
@@ -26,6 +27,7 @@ struct FitCliOptions {
   bool fix_aspect_ratio = false, zero_tangential = false, fix_principal_point = false;
   double outlier_k = 4.0;
   std::string initial_camera;
+  bool single_start = false;  // rich models: the staged fit alone, no multi-start
 
   IntrinsicFitOptions to_options(const Observations& observations) const {
     IntrinsicFitOptions o;
@@ -130,13 +132,28 @@ struct FitOutcome {
   IntrinsicFit fit;
   std::optional<CrossValidation> cross_validation;
   std::string cross_validation_note;
+  std::string start_note;  // the multi-start's winner (rich models)
 };
 
 // The fit, then the cross-validation when both halves have enough views.
+// Rich models (opencv8/12/14) by the multi-start (calib/fit/multi_start.h)
+// unless `multi_start` is off.
 FitOutcome fit_with_diagnostics(const Observations& observations, const IntrinsicFitOptions& options,
-                                UncertaintyMethod method) {
+                                UncertaintyMethod method, bool multi_start = true) {
   ProgressBar bar("fitting", 2);
-  FitOutcome out{fit_intrinsics(observations, options), std::nullopt, ""};
+  std::string note;
+  IntrinsicFit fit = [&] {
+    if (!multi_start || !is_rich_lens_model(options.lens_model)) return fit_intrinsics(observations, options);
+    MultiStartFit m = fit_intrinsics_multi_start(observations, options);
+    int tried = 0;
+    for (const FitStart& s : m.starts) tried += s.ok;
+    note = fmt::format("multi-start: '{}' won (RMS {:.6f} px; the staged fit {:.6f} px; {} of {} starts converged; "
+                       "{:.2f} s)",
+                       m.starts[m.winner].name, m.fit.rms_px, m.starts[0].rms_px, tried, m.starts.size(),
+                       m.total_time_s);
+    return std::move(m.fit);
+  }();
+  FitOutcome out{std::move(fit), std::nullopt, "", note};
   bar.advance();
   try {
     out.cross_validation = cross_validation(observations, options, 64, method);
@@ -155,6 +172,7 @@ std::string figure(double value, const char* unit = " px") {
 
 void print_fit(const FitOutcome& o, const UncertaintyCliOptions& u) {
   const IntrinsicFit& f = o.fit;
+  if (!o.start_note.empty()) std::printf("%s\n", o.start_note.c_str());
   std::printf("fit: RMS %s over %d corners (%d outliers dropped), %d views%s; %.2f s\n", figure(f.rms_px).c_str(),
               f.inlier_count, f.outlier_count, static_cast<int>(f.view_rms_px.size() - f.skipped_views.size()),
               f.skipped_views.empty() ? "" : fmt::format(" ({} skipped)", f.skipped_views.size()).c_str(),
@@ -242,7 +260,9 @@ void run_intrinsics(const IntrinsicsOptions& o) {
   }
   const IntrinsicFitOptions options = o.fit.to_options(observations);
   const FitOutcome outcome =
-      naming_file(source, [&] { return fit_with_diagnostics(observations, options, o.uncertainty.to_method()); });
+      naming_file(source, [&] {
+        return fit_with_diagnostics(observations, options, o.uncertainty.to_method(), !o.fit.single_start);
+      });
   print_fit(outcome, o.uncertainty);
 
   Camera camera{o.name.empty() ? fs::path(o.output).stem().string() : o.name, outcome.fit.camera, std::nullopt,
@@ -307,6 +327,9 @@ void register_calib_commands(CLI::App& app) {
   i->add_option("--observations-out", in->observations_out, "Also save the detected observations (.yaml/.json)");
   i->add_option("--overlay-dir", in->overlay_dir, "Write each photo with its detected corners as PNG here");
   i->add_option("--name", in->name, "Camera name (default: the output file's stem)");
+  i->add_flag("--single-start", in->fit.single_start,
+              "opencv8/12/14: the staged fit alone (default: several starts, the lowest cost kept; "
+              "docs/intrinsic_fit.md)");
   i->add_option("--pixel-pitch-um", in->pixel_pitch_um, "Sensor pixel size in um (for DaVis output; 0.1 to 1000)")
       ->check(finite_range(0.1, 1000));
   add_fit_options(i, in->fit);
