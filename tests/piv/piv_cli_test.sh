@@ -50,6 +50,14 @@ expect 0 "$G" piv a.pgm b.pgm --mask mask.pgm -o m.txt --window 32 --overlap 0.5
 awk '!/^#/ { if ($1 < 63.5) { if ($5 != 2 || $3 != "nan") bad++ } else if ($5 == 2) bad++ } END { exit bad > 0 }' m.txt ||
   fail "mask not respected: $(grep -v '^#' m.txt | head -3)"
 
+# --- a real recording (PIVlab's jet, 8-bit JPEG, data/piv_pairs): read, every
+# vector written, the jet (leftwards, docs/piv.md) seen as negative u
+jet="$src/data/piv_pairs/pivlab_jet"
+expect 0 "$G" piv "$jet/Jet_0001A.jpg" "$jet/Jet_0001B.jpg" -o jet.txt
+has out.txt "86 x 64 vectors (window 32 px, step 16 px)"
+awk '!/^#/ { n++; if ($5 == 0 && $2 > 600 && $2 < 700 && $1 > 400 && $1 < 1200) { k++; su += $3 } }
+     END { exit !(n == 5504 && k > 0 && su / k < -1) }' jet.txt || fail "jet vectors: $(grep -v '^#' jet.txt | head -3)"
+
 # --- refusals: one line naming the file or the option, exit 2, nothing written
 expect 2 "$G" piv a.pgm small.pgm -o r.txt
 has err.txt "small.pgm: field 'image size'"
