@@ -16,7 +16,9 @@
 // in python, all 3 passes of tests/calib/fit/mrcal_fit.py; seeding and python
 // start-up excluded). Each first on
 // one thread, then with the default threads (glasspiv num_threads = 0, OpenCV's
-// default cv::setNumThreads; mrcal is single-threaded).
+// default cv::setNumThreads; mrcal is single-threaded). For opencv8 also, on one
+// thread: glasspiv's multi-start (calib/fit/multi_start.h, the winning start
+// named) and cv::calibrateCamera run to convergence (1000 iterations, 1e-15).
 //
 // Then the projection uncertainty's cost on the default fit (its state
 // covariance comes with the fit): one pixel, and the report's map (samples
@@ -43,6 +45,7 @@
 
 #include "calib/fit/calibration_diagnostics.h"
 #include "calib/fit/intrinsic_fit.h"
+#include "calib/fit/multi_start.h"
 #include "calib/lens_maps.h"
 #include "mrcal_peer.h"
 #include "opencv_peer.h"
@@ -139,6 +142,22 @@ std::vector<UncertaintyRow> bench_lens(const Lens& lens, int runs) {
     const double t = best_seconds(runs, [&] { rms = testing::opencv_calibrate(obs, model, &opencv); });
     rows.push_back({"cv::calibrateCamera", threads == 1 ? "1" : "default (" + std::to_string(default_threads) + ")", t,
                     rms, opencv});
+  }
+  // Rich models: the multi-start (calib/fit/multi_start.h) against
+  // cv::calibrateCamera run to convergence (1000 iterations, 1e-15), one thread.
+  if (is_rich_lens_model(model)) {
+    IntrinsicFitOptions o = bare;
+    o.num_threads = 1;
+    std::optional<MultiStartFit> multi;
+    const double t = best_seconds(runs, [&] { multi = fit_intrinsics_multi_start(obs, o); });
+    rows.push_back({"glasspiv multi-start, no outlier loop (won: " + multi->starts[multi->winner].name + ")", "1", t,
+                    multi->fit.rms_px, multi->fit.camera});
+    cv::setNumThreads(1);
+    CameraModel opencv = lens.truth;
+    double rms = 0;
+    const cv::TermCriteria tight(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 1000, 1e-15);
+    const double t_tight = best_seconds(runs, [&] { rms = testing::opencv_calibrate(obs, model, &opencv, nullptr, tight); });
+    rows.push_back({"cv::calibrateCamera to convergence (1000 iterations, 1e-15)", "1", t_tight, rms, opencv});
   }
   cv::setNumThreads(default_threads);
 
