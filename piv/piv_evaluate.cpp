@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "piv/cross_correlation.h"
+#include "piv/mask_overlap.h"
 #include "piv/row_threads.h"
 #include "piv/subpixel_peak.h"
 
@@ -114,8 +115,9 @@ PivField evaluate_piv(const cv::Mat& frame_a, const cv::Mat& frame_b, const cv::
     total += static_cast<std::size_t>(grids.back().size());
   }
 
-  // Non-finite pixels are unusable and read as zero. Frames with none and no
-  // mask are used as they are (read only), without copies.
+  // Non-finite pixels are unusable and read as zero. Continuous frames with
+  // none and no mask are used as they are (read only), without copies; the
+  // windows below take one row stride (the width) for frames and mask.
   bool any_unusable = false;
   for (int y = 0; y < h && !any_unusable; ++y) {
     const float* pa = frame_a.ptr<float>(y);
@@ -125,7 +127,8 @@ PivField evaluate_piv(const cv::Mat& frame_a, const cv::Mat& frame_b, const cv::
     for (int x = 0; x < w; ++x) bad |= !(std::isfinite(pa[x]) && std::isfinite(pb[x])) || (m && !m[x]);
     any_unusable = bad;
   }
-  cv::Mat a = frame_a, b = frame_b, usable;
+  cv::Mat a = frame_a.isContinuous() ? frame_a : frame_a.clone();
+  cv::Mat b = frame_b.isContinuous() ? frame_b : frame_b.clone(), usable;
   if (any_unusable) {
     a = frame_a.clone();
     b = frame_b.clone();
@@ -169,19 +172,28 @@ PivField evaluate_piv(const cv::Mat& frame_a, const cv::Mat& frame_b, const cv::
     std::vector<double> u(count, kNaN), v(count, kNaN), ratio(count, 0.0);
     std::vector<VectorFlag> flags(count, VectorFlag::invalid);
     std::vector<std::unique_ptr<BatchCorrelator>> correlators(static_cast<std::size_t>(threads));
+    std::vector<std::unique_ptr<MaskOverlap>> overlaps(static_cast<std::size_t>(threads));
     done = 0;
     for_each_row(
         g.rows, threads,
         [&](int row, int thread) {
           auto& corr = correlators[static_cast<std::size_t>(thread)];
           if (!corr) corr = std::make_unique<BatchCorrelator>(g.window_px, kBatchPairs);
+          auto& overlap = overlaps[static_cast<std::size_t>(thread)];
+          if (!overlap && (!ua.empty() || !ub.empty()))
+            overlap = std::make_unique<MaskOverlap>(g.window_px, corr->plane_px());
           int cols_of_slots[kBatchPairs];
+          const std::uint8_t* valid_a_of_slots[kBatchPairs];
+          const std::uint8_t* valid_b_of_slots[kBatchPairs];
           // Peaks of the batch's planes become vectors.
           auto flush = [&]() {
             corr->correlate();
             for (int slot = 0; slot < corr->size(); ++slot) {
               const int col = cols_of_slots[slot];
               const std::size_t i = static_cast<std::size_t>(g.index(col, row));
+              if (overlap)
+                overlap->normalise(corr->plane(slot), valid_a_of_slots[slot],
+                                   static_cast<int>(ua.step1()), valid_b_of_slots[slot], static_cast<int>(ub.step1()));
               const CorrelationPeak peak =
                   find_correlation_peak(corr->plane(slot), corr->plane_px(), options.peak_exclusion_radius_px);
               if (!peak.found) continue;
@@ -207,6 +219,8 @@ PivField evaluate_piv(const cv::Mat& frame_a, const cv::Mat& frame_b, const cv::
             const int slot = corr->add(da.ptr<float>(y) + x, stride, va, db.ptr<float>(y) + x, stride, vb);
             if (slot < 0) continue;
             cols_of_slots[slot] = col;
+            valid_a_of_slots[slot] = va;
+            valid_b_of_slots[slot] = vb;
             if (corr->full()) flush();
           }
           flush();

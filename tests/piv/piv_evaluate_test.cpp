@@ -249,6 +249,24 @@ TEST(PivEvaluate, ResultDoesNotDependOnThreads) {
   }
 }
 
+// Frames that are views into larger images (rows not contiguous, strides of
+// their own) give the field of contiguous copies.
+TEST(PivEvaluate, FramesThatAreViewsGiveTheFieldOfCopies) {
+  const ParticleImagePair p = pair_for(uniform(1.3, -0.7), 53, 128);
+  cv::Mat big_a = cv::Mat::zeros(150, 170, CV_32F), big_b = cv::Mat::zeros(140, 200, CV_32F);
+  p.a.copyTo(big_a(cv::Rect(5, 7, 128, 128)));
+  p.b.copyTo(big_b(cv::Rect(40, 3, 128, 128)));
+  const cv::Mat view_a = big_a(cv::Rect(5, 7, 128, 128)), view_b = big_b(cv::Rect(40, 3, 128, 128));
+  ASSERT_FALSE(view_a.isContinuous());
+  const PivField copies = evaluate_piv(p.a, p.b, cv::Mat(), PivOptions{});
+  const PivField views = evaluate_piv(view_a, view_b, cv::Mat(), PivOptions{});
+  ASSERT_EQ(copies.size(), views.size());
+  for (std::size_t i = 0; i < copies.size(); ++i) {
+    EXPECT_EQ(copies.u_px[i], views.u_px[i]);
+    EXPECT_EQ(copies.v_px[i], views.v_px[i]);
+  }
+}
+
 TEST(PivEvaluate, ProgressReachesTheTotal) {
   const ParticleImagePair p = pair_for(uniform(1, 1), 52, 128);
   std::size_t last = 0, total = 0;
