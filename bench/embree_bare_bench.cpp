@@ -33,6 +33,7 @@
 // segments need no BVH query but count as segments).
 #include <embree3/rtcore.h>
 #include <sys/resource.h>
+#include <time.h>
 
 #include <algorithm>
 #include <cmath>
@@ -59,6 +60,14 @@ using bench::square;
 using bench::median;
 
 namespace {
+
+// CPU seconds of the whole process (all threads): on a machine shared with
+// other work this moves less than the wall clock.
+double process_cpu_s() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
 
 // ---------------------------------------------------------------------------
 // The bare tracer.
@@ -365,41 +374,53 @@ int main(int argc, char** argv) {
   struct Run {
     double seconds = 0;
     long segments = 0;
+    double cpu_s = 0;
     double mseg_per_s() const { return segments / seconds / 1e6; }
+    double mseg_per_cpu_s() const { return segments / cpu_s / 1e6; }
   };
   std::vector<Run> bare_runs, refr_runs, def_runs;
   BareCounts bare_counts;
   TransportStats refr_stats, def_stats;
+  double refr_map_mib = 0, def_map_mib = 0;
+  const double rss_before_maps = peak_rss_mib();
 
-  std::printf("\n| rep | tracer | s | segments | M segments/s | s per MP | glasspiv/bare, segments/s |\n");
-  std::printf("|---|---|---|---|---|---|---|\n");
+  std::printf("\n| rep | tracer | s | segments | M segments/s | s per MP | glasspiv/bare, segments/s | CPU s | "
+              "glasspiv/bare, segments per CPU s |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|\n");
   for (int rep = 1; rep <= reps; ++rep) {
     {
       const Stopwatch clock;
+      const double cpu0 = process_cpu_s();
       bare_counts = run_bare(bare, rays, threads);
-      bare_runs.push_back({clock.seconds(), bare_counts.segments});
+      bare_runs.push_back({clock.seconds(), bare_counts.segments, process_cpu_s() - cpu0});
     }
     {
       const Stopwatch clock;
+      const double cpu0 = process_cpu_s();
       const TransportMap map = build_transport_map(ts, cam, pose, refraction_only, 1, threads);
-      refr_runs.push_back({clock.seconds(), map.stats.branches_traced});
+      refr_runs.push_back({clock.seconds(), map.stats.branches_traced, process_cpu_s() - cpu0});
       refr_stats = map.stats;
+      refr_map_mib = map.memory_bytes() / 1048576.0;
     }
     {
       const Stopwatch clock;
+      const double cpu0 = process_cpu_s();
       const TransportMap map = build_transport_map(ts, cam, pose, defaults, 1, threads);
-      def_runs.push_back({clock.seconds(), map.stats.branches_traced});
+      def_runs.push_back({clock.seconds(), map.stats.branches_traced, process_cpu_s() - cpu0});
       def_stats = map.stats;
+      def_map_mib = map.memory_bytes() / 1048576.0;
     }
     const Run& b = bare_runs.back();
     const Run& r = refr_runs.back();
     const Run& d = def_runs.back();
-    std::printf("| %d | bare Embree, refraction only | %.3f | %ld | %.2f | %.3f | |\n", rep, b.seconds, b.segments,
-                b.mseg_per_s(), b.seconds / mp);
-    std::printf("| %d | glasspiv, refraction only | %.3f | %ld | %.2f | %.3f | %.3f |\n", rep, r.seconds, r.segments,
-                r.mseg_per_s(), r.seconds / mp, r.mseg_per_s() / b.mseg_per_s());
-    std::printf("| %d | glasspiv, default (reflections, min_weight 1e-2) | %.3f | %ld | %.2f | %.3f | %.3f |\n", rep,
-                d.seconds, d.segments, d.mseg_per_s(), d.seconds / mp, d.mseg_per_s() / b.mseg_per_s());
+    std::printf("| %d | bare Embree, refraction only | %.3f | %ld | %.2f | %.3f | | %.3f | |\n", rep, b.seconds,
+                b.segments, b.mseg_per_s(), b.seconds / mp, b.cpu_s);
+    std::printf("| %d | glasspiv, refraction only | %.3f | %ld | %.2f | %.3f | %.3f | %.3f | %.3f |\n", rep, r.seconds,
+                r.segments, r.mseg_per_s(), r.seconds / mp, r.mseg_per_s() / b.mseg_per_s(), r.cpu_s,
+                r.mseg_per_cpu_s() / b.mseg_per_cpu_s());
+    std::printf("| %d | glasspiv, default (reflections, min_weight 1e-2) | %.3f | %ld | %.2f | %.3f | %.3f | %.3f | %.3f |\n",
+                rep, d.seconds, d.segments, d.mseg_per_s(), d.seconds / mp, d.mseg_per_s() / b.mseg_per_s(), d.cpu_s,
+                d.mseg_per_cpu_s() / b.mseg_per_cpu_s());
     std::fflush(stdout);
   }
 
@@ -423,6 +444,13 @@ int main(int argc, char** argv) {
               med(refr_runs, secs) / mp, ratio_med(refr_runs));
   std::printf("| glasspiv, default | %.3f | %.2f | %.3f | %.3f |\n", med(def_runs, secs), med(def_runs, rate),
               med(def_runs, secs) / mp, ratio_med(def_runs));
+  auto cpu_ratio_med = [&](const std::vector<Run>& runs) {
+    std::vector<double> v;
+    for (std::size_t i = 0; i < runs.size(); ++i) v.push_back(runs[i].mseg_per_cpu_s() / bare_runs[i].mseg_per_cpu_s());
+    return median(v);
+  };
+  std::printf("glasspiv/bare, segments per CPU second (same rep, median): refraction only %.3f, default %.3f\n",
+              cpu_ratio_med(refr_runs), cpu_ratio_med(def_runs));
   {
     std::vector<double> scaled;
     for (std::size_t i = 0; i < def_runs.size(); ++i)
@@ -457,6 +485,10 @@ int main(int argc, char** argv) {
               def_stats.branches_cut_by_weight, def_stats.branches_cut_by_depth, def_stats.crossings);
   std::printf("  bare vs glasspiv refraction-only segments: %+.4f %%\n",
               100.0 * (double(bare_counts.segments) - refr_stats.branches_traced) / refr_stats.branches_traced);
-  std::printf("peak RSS %.1f MiB\n", peak_rss_mib());
+  std::printf("maps: refraction only %.1f MiB, default %.1f MiB (TransportMap::memory_bytes); peak RSS %.1f MiB "
+              "before the first map build (scene, BVHs, float camera rays), %.1f MiB at the end: the builds added "
+              "%.1f MiB, %.2fx the default map\n",
+              refr_map_mib, def_map_mib, rss_before_maps, peak_rss_mib(), peak_rss_mib() - rss_before_maps,
+              (peak_rss_mib() - rss_before_maps) / def_map_mib);
   return 0;
 }
