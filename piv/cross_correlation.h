@@ -63,6 +63,7 @@ class BatchCorrelator {
   void correlate();
   // plane_px x plane_px, row-major, unshifted (see above).
   const float* plane(int slot) const { return planes_.ptr<float>(slot * plane_px_); }
+  float* plane(int slot) { return planes_.ptr<float>(slot * plane_px_); }  // for normalising in place
 
  private:
   // Copies a window mean-subtracted into a zero-padded plane_px x plane_px

@@ -13,7 +13,20 @@
 // shear. Outliers are replaced by the median of their valid neighbours
 // that are not outliers themselves; an outlier without such neighbours becomes
 // invalid (NaN). A vector with fewer than min_neighbours valid neighbours is
-// not tested (one or two neighbours say nothing about a median). No I/O.
+// not tested (one or two neighbours say nothing about a median).
+//
+// follow_gradient (the default) extends the test from a locally uniform field
+// to a locally linear one: each neighbour's value is first carried to the
+// vector's place along the local gradient (per component, the median of the
+// slopes between the 5 x 5 block's vectors sharing a grid row or column),
+// U_i - G . d_i, and
+// the test and the replacement use those values. In a uniform field it is the
+// paper's test; in a velocity gradient whose neighbourhood is one-sided (a
+// mask's edge, the grid's border) the paper's median lies a grid step's
+// change away and the residual median is small, so good vectors fail and are
+// replaced by a biased median: on the demo's vortex behind the reactor's
+// spheres 27 of 250 vectors, 0.23 px RMS against 0.10 px untested.
+// follow_gradient = false is the paper's test. No I/O.
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +43,7 @@ struct MedianTestOptions {
   double epsilon_px = 0.1;
   double threshold = 2.0;
   int min_neighbours = 3;
+  bool follow_gradient = true;  // see above
 };
 
 struct MedianTestCounts {

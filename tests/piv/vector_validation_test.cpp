@@ -87,5 +87,49 @@ TEST(NormalisedMedianTest, OutlierWithoutGoodNeighboursBecomesInvalid) {
   EXPECT_TRUE(std::isnan(f.u[4]));
 }
 
+// A strong gradient (0.5 px per vector, a vortex core's on the demo's grid)
+// next to a masked region: the vectors at the mask's edge see one side only.
+// The paper's test flags good vectors there and replaces them a grid step's
+// change away; following the gradient it flags none, and a planted outlier on
+// the edge is replaced by the field's own value.
+TEST(NormalisedMedianTest, FollowsTheGradientAtAMasksEdge) {
+  auto sheared = [](unsigned seed) {
+    Field f;
+    f.cols = f.rows = 12;
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> noise(0, 0.02);
+    for (int r = 0; r < f.rows; ++r)
+      for (int c = 0; c < f.cols; ++c) {
+        const bool masked = c < 4 || (c < 7 && r < 5);  // an L-shaped mask
+        f.u.push_back(masked ? std::nan("") : 0.5 * r + noise(rng));
+        f.v.push_back(masked ? std::nan("") : -0.3 * c + 0.2 * r + noise(rng));
+        f.flags.push_back(masked ? VectorFlag::invalid : VectorFlag::valid);
+      }
+    return f;
+  };
+  int paper_outliers = 0;
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    Field paper = sheared(seed), followed = sheared(seed);
+    MedianTestOptions o;
+    o.follow_gradient = false;
+    paper_outliers += normalised_median_test(paper.cols, paper.rows, paper.u, paper.v, paper.flags, o).outliers;
+    EXPECT_EQ(normalised_median_test(followed.cols, followed.rows, followed.u, followed.v, followed.flags).outliers, 0)
+        << seed;
+  }
+  EXPECT_GT(paper_outliers, 5);  // what following the gradient avoids
+
+  Field f = sheared(9);
+  const int at = 8 * 12 + 4;  // on the mask's straight edge: five neighbours
+  const double truth_u = 0.5 * 8, truth_v = -0.3 * 4 + 0.2 * 8;
+  f.u[at] += 2.0;
+  const MedianTestCounts n = normalised_median_test(f.cols, f.rows, f.u, f.v, f.flags);
+  EXPECT_EQ(n.outliers, 1);
+  EXPECT_EQ(f.flags[at], VectorFlag::replaced);
+  for (std::size_t i = 0; i < f.flags.size(); ++i)
+    if (static_cast<int>(i) != at) EXPECT_NE(f.flags[i], VectorFlag::replaced) << i;
+  EXPECT_NEAR(f.u[at], truth_u, 0.05);  // the neighbours' noise, not a grid step (0.5 px)
+  EXPECT_NEAR(f.v[at], truth_v, 0.05);
+}
+
 }  // namespace
 }  // namespace glasspiv
