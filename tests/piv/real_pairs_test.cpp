@@ -12,11 +12,11 @@
 // each other as much). The bounds sit a margin beyond what was measured
 // (printed, and in docs/piv.md) and far from what a fault gives: planted in
 // the field compared with the matchTemplate reference, u and v swapped left
-// 10-19 % of the vectors within 0.2 px (RMS 1.7 px), a sign error 2-4 %
-// (2.6-2.8 px), integer peaks without the sub-pixel fit 18-27 %, against the
-// 74-83 % measured. A bias of 0.05 px would show in the mean difference from
-// the matchTemplate reference over 460-4100 vectors (measured within 0.016
-// px); DIS is held to 0.15 px, as it differs from matchTemplate by 0.1 px in
+// 11-20 % of the vectors within 0.2 px (RMS 1.7 px), a sign error 2-4 %
+// (2.6-2.8 px), integer peaks without the sub-pixel fit 18-28 %, against the
+// 76-84 % measured. A bias of 0.05 px would show in the mean difference from
+// the matchTemplate reference over 440-4000 vectors (measured within 0.009
+// px); DIS is held to 0.15 px, as it differs from matchTemplate by 0.08 px in
 // the mean on the aquarium pair itself.
 #include <algorithm>
 #include <cmath>
