@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <stdexcept>
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
@@ -61,8 +62,12 @@ std::string write_page(const fs::path& out, const DemoAlignmentSummary& s, doubl
   page += fmt::format(
       "<p>A synthetic photograph ({}&times;{} px) of the reference reactor with 14 ArUco markers on its front frame "
       "and a ChArUco board behind the packing, rendered through the glass from the scene's pose (the truth), "
-      "blurred, vignetted, with 0.5 grey levels of noise. Every error below is against that truth.</p>\n",
-      s.width, s.height);
+      "blurred, vignetted, with 0.5 grey levels of noise. Every error below is against that truth. {}</p>\n",
+      s.width, s.height,
+      s.calibrated_intrinsics
+          ? "The camera's intrinsics are the demo's own calibration of it (20 synthetic ChArUco photos), not the "
+            "truth: their small errors are absorbed by the pose, as in a real session."
+          : "The camera's intrinsics are the true ones.");
   page += fmt::format("<figure><img src=\"{}\" alt=\"photo\"><figcaption>The photograph.</figcaption></figure>\n",
                       file_name(s.photo_png));
 
@@ -143,29 +148,36 @@ std::string write_page(const fs::path& out, const DemoAlignmentSummary& s, doubl
 
 }  // namespace
 
-DemoAlignmentSummary run_alignment_demo(const std::string& folder, const std::string& scene_path, int binning) {
+DemoAlignmentSummary run_alignment_demo(const std::string& folder, const std::string& scene_path, int binning,
+                                        const CameraModel* calibrated) {
   const Stopwatch total;
   const fs::path out(folder);
   fs::create_directories(out);
   DemoAlignmentSummary s;
   const PreparedScene ps = prepare_scene(scene_path, "", binning);
-  const CameraModel& model = ps.camera().model;
+  const CameraModel& true_model = ps.camera().model;
+  if (calibrated && (calibrated->width_px() != true_model.width_px() || calibrated->height_px() != true_model.height_px()))
+    throw std::invalid_argument("run_alignment_demo: the calibrated camera's image size differs from the scene's");
+  const CameraModel& model = calibrated ? *calibrated : true_model;  // the user's camera
   const RigidTransform truth = *ps.camera().camera_from_world;
+  s.calibrated_intrinsics = calibrated != nullptr;
   s.width = model.width_px();
   s.height = model.height_px();
   SetupLook look;
   look.background_radiance = ps.scene.background.radiance;
   look.textures = ps.textures_by_solid();
   const std::unique_ptr<SceneIndex> index = make_scene_index(ps.trace);
-  const auto render = [&](const RigidTransform& pose, int samples) {
-    return render_setup(ps.trace, *index, look, model, pose, TraceOptions{}, samples, 0);
+  const auto render_with = [&](const CameraModel& camera, const RigidTransform& pose, int samples) {
+    return render_setup(ps.trace, *index, look, camera, pose, TraceOptions{}, samples, 0);
   };
+  const auto render = [&](const RigidTransform& pose, int samples) { return render_with(model, pose, samples); };
   const auto as_mat = [&](std::vector<float>& v) { return cv::Mat(s.height, s.width, CV_32F, v.data()); };
 
   // The photograph: the truth's render, made to look like a camera's.
   std::printf("   rendering the photograph through the glass...\n");
   Stopwatch clock;
-  const cv::Mat photo8 = photo_from_radiance(render(truth, kPhotoSamplesPerAxis), s.width, s.height, PhotoLook{});
+  const cv::Mat photo8 =
+      photo_from_radiance(render_with(true_model, truth, kPhotoSamplesPerAxis), s.width, s.height, PhotoLook{});
   s.photo_seconds = clock.seconds();
   s.photo_png = (out / "photo.png").string();
   write_png(s.photo_png, photo8);
@@ -225,7 +237,7 @@ DemoAlignmentSummary run_alignment_demo(const std::string& folder, const std::st
   s.refine_seconds = r.seconds;
 
   // Overlays and scores at the demo camera's full size, before and after.
-  std::vector<float> before = render(start, 1), after = render(r.camera_from_world, 1), at_truth = render(truth, 1);
+  std::vector<float> before = render(start, 1), after = render(r.camera_from_world, 1), at_truth = render_with(true_model, truth, 1);
   const PhotoEdgeModel photo_edges(photo);
   const Similarity score_before = photo_edges.compare(as_mat(before)), score_after = photo_edges.compare(as_mat(after));
   s.gradient_ncc_before = score_before.gradient_ncc;
@@ -259,6 +271,7 @@ DemoAlignmentSummary run_alignment_demo(const std::string& folder, const std::st
   s.sensitivity_png = (out / "sensitivity_mm.png").string();
   write_png(s.sensitivity_png, sensitivity_heat_map(m, m.displacement_mm, m.p95_mm));
 
+  s.recovered = Camera{ps.camera().name, model, r.camera_from_world, ps.camera().pixel_pitch_um};
   s.html = write_page(out, s, m.p95_mm);
   s.seconds = total.seconds();
   return s;

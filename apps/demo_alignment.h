@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "align/align_refine.h"
+#include "calib/camera.h"
 
 namespace glasspiv {
 
@@ -51,10 +52,18 @@ struct DemoAlignmentSummary {
   std::string photo_png, overlay_before_png, overlay_before_edges_png, overlay_after_png, overlay_after_edges_png,
       sensitivity_png, html;
   double seconds = 0;
+  // The camera the step recovered: the intrinsics it was given (the scene's
+  // own, or a calibration's) and the refined pose.
+  bool calibrated_intrinsics = false;
+  std::optional<Camera> recovered;
 };
 
 // scene_path: reactor_markers.yaml as the demo writes it (its camera and marker
 // specs where the scene expects them); binning: the camera's read-out binning.
-DemoAlignmentSummary run_alignment_demo(const std::string& folder, const std::string& scene_path, int binning);
+// calibrated (optional): the binned camera's intrinsics as a calibration found
+// them; the photograph is still taken by the scene's (true) camera, and the
+// pose, the refinement and the sensitivity use these, as a user's would.
+DemoAlignmentSummary run_alignment_demo(const std::string& folder, const std::string& scene_path, int binning,
+                                        const CameraModel* calibrated = nullptr);
 
 }  // namespace glasspiv

@@ -26,23 +26,24 @@ namespace {
 namespace fs = std::filesystem;
 
 // The session: 20 views (mrcal and OpenCV both advise many well-spread, tilted
-// views), the board 300-450 mm away, tilted up to 45 degrees, and a sensor with
+// views), the board tilted up to 45 degrees (its distances: DemoCalibrationViews), and a sensor with
 // shot noise (4000 e- at white) and 1 DN read noise. Fixed seeds: the demo is
 // reproducible to the bit.
 constexpr int kViews = 20;
-constexpr double kNearMm = 300, kFarMm = 450, kMaxTiltDeg = 45;
+constexpr double kMaxTiltDeg = 45;
 constexpr std::uint32_t kPoseSeed = 2026;
 constexpr double kBoardPxPerMm = 12;  // render finer than the photos' footprint of a board millimetre
 
 }  // namespace
 
 DemoCalibrationSummary run_calibration_demo(const std::string& folder, const std::string& truth_camera_path,
-                                            const std::string& target_path) {
+                                            const std::string& target_path, const DemoCalibrationViews& views) {
   const fs::path dir(folder);
   const Camera truth = read_camera(truth_camera_path);
   const TargetSpec spec = read_target_yaml(target_path);
   const TargetRender board = render_target(spec, kBoardPxPerMm, default_margin_mm(spec));
-  const auto poses = calibration_view_poses(truth.model, board_size_mm(spec), kViews, kNearMm, kFarMm, kMaxTiltDeg, kPoseSeed);
+  const auto poses = calibration_view_poses(truth.model, board_size_mm(spec), kViews, views.near_mm, views.far_mm,
+                                              kMaxTiltDeg, kPoseSeed);
 
   std::printf("   photographing the board from %d views...\n", kViews);
   std::vector<std::string> photos;
@@ -74,8 +75,11 @@ DemoCalibrationSummary run_calibration_demo(const std::string& folder, const std
   options.lens_model = truth.model.lens_model();
   const IntrinsicFit fit = fit_intrinsics(observations, options);
   const CrossValidation cv = cross_validation(observations, options);
-  const Camera fitted{"session_fitted", fit.camera, std::nullopt, truth.pixel_pitch_um};
-  write_cameras((dir / "session_fitted.yaml").string(), {fitted});
+  // "session_truth" -> "session_fitted".
+  std::string name = truth.name;
+  if (name.size() > 6 && name.compare(name.size() - 6, 6, "_truth") == 0) name.resize(name.size() - 6);
+  const Camera fitted{name + "_fitted", fit.camera, std::nullopt, truth.pixel_pitch_um};
+  write_cameras((dir / (fitted.name + ".yaml")).string(), {fitted});
   std::printf("   writing the report...\n");
   const CalibrationReportFiles files =
       write_calibration_report((dir / "report").string(), {observations, options, fit, &cv, fitted.name,
@@ -90,6 +94,7 @@ DemoCalibrationSummary run_calibration_demo(const std::string& folder, const std
   s.focal_error_rel = std::abs(fit.camera.fx_px() - truth.model.fx_px()) / truth.model.fx_px();
   s.principal_point_error_px = std::hypot(fit.camera.cx_px() - truth.model.cx_px(), fit.camera.cy_px() - truth.model.cy_px());
   s.report_html = files.html;
+  s.fitted = fitted;
   return s;
 }
 

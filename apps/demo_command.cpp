@@ -22,6 +22,8 @@
 #include "apps/plots.h"
 #include "calib/io/camera_file.h"
 #include "calib/lens_maps.h"
+#include "targets/target_spec.h"
+#include "targets/target_yaml.h"
 #include "util/atomic_file.h"
 
 namespace glasspiv::demo_cameras {
@@ -51,12 +53,39 @@ std::pair<double, double> pose_difference(const Camera& a, const Camera& b) {
   return {Eigen::AngleAxisd(d.rotation).angle(), d.translation_mm.norm()};
 }
 
-// 7. Alignment: the model placed on a photograph of the setup.
-void run_alignment_step(const fs::path& out, const fs::path& scenes_dir, int binning) {
-  std::printf("\n7. Alignment: a photograph of the reactor with 14 ArUco markers on its frame and a ChArUco board behind "
-              "the packing (scenes/reactor_markers.yaml), the model placed on it:\n");
-  const DemoAlignmentSummary al =
-      run_alignment_demo((out / "align").string(), (scenes_dir / "reactor_markers.yaml").string(), binning);
+// The reactor's camera, binned as the demo reads it out, calibrated as step 4
+// calibrates its camera: the intrinsics the alignment and the PIV step use.
+// The board is photographed from where it spans 60 % to 40 % of the image's
+// width, as step 4's 300-450 mm do for its camera.
+Camera calibrate_reactor_camera(const fs::path& out, const Camera& reactor, int binning, const fs::path& target) {
+  std::printf("\n7. The reactor's camera (binned %dx%d) calibrated from 20 synthetic photos of the ChArUco board, as in "
+              "step 4:\n", binning, binning);
+  const Camera truth{"reactor_truth", binned(reactor.model, binning), std::nullopt,
+                     reactor.pixel_pitch_um ? std::optional<double>(*reactor.pixel_pitch_um * binning) : std::nullopt};
+  const fs::path folder = out / "reactor_calibration";
+  const std::string truth_path = (folder / "reactor_truth.yaml").string();
+  write_cameras(truth_path, {truth});
+  const Eigen::Vector2d board_mm = board_size_mm(read_target_yaml(target.string()));
+  const double span_px = truth.model.fx_px() * board_mm.x() / truth.model.width_px();  // board width x f / image width
+  DemoCalibrationViews views;
+  views.near_mm = span_px / 0.6;
+  views.far_mm = span_px / 0.4;
+  const DemoCalibrationSummary c = run_calibration_demo(folder.string(), truth_path, target.string(), views);
+  std::printf("   board %.0f-%.0f mm away; fit RMS %.3f px; focal length error %.4f%%; principal point error %.3f px; "
+              "fitted vs true camera %.4f px RMS (%.4f px after the implied rotation)\n",
+              views.near_mm, views.far_mm, c.rms_px, 100 * c.focal_error_rel, c.principal_point_error_px,
+              c.truth_difference_rms_px, c.truth_difference_rotated_rms_px);
+  std::printf("   report: %s\n", c.report_html.c_str());
+  return *c.fitted;
+}
+
+// 8. Alignment: the model placed on a photograph of the setup.
+DemoAlignmentSummary run_alignment_step(const fs::path& out, const fs::path& scenes_dir, int binning,
+                                        const Camera& calibrated) {
+  std::printf("\n8. Alignment: a photograph of the reactor with 14 ArUco markers on its frame and a ChArUco board behind "
+              "the packing (scenes/reactor_markers.yaml), the model with the calibrated camera placed on it:\n");
+  const DemoAlignmentSummary al = run_alignment_demo(
+      (out / "align").string(), (scenes_dir / "reactor_markers.yaml").string(), binning, &calibrated.model);
   std::printf("   %-40s the photograph (%dx%d, blur, vignette, 0.5 grey levels of noise), rendered in %.1f s\n",
               al.photo_png.c_str(), al.width, al.height, al.photo_seconds);
   std::printf("   found %d of %d markers and %d of the rear board's %d corners%s\n", al.markers_found, al.markers,
@@ -96,14 +125,15 @@ void run_alignment_step(const fs::path& out, const fs::path& scenes_dir, int bin
                 r.median_mm, r.p95_mm);
   std::printf("   %-40s the sheet point each pixel sees: how far it moves, mm\n", al.sensitivity_png.c_str());
   std::printf("   report: %s (%.1f s for this step)\n", al.html.c_str(), al.seconds);
+  return al;
 }
 
-// 8. PIV: a simulated experiment in the reactor, corrected and evaluated against the truth.
-void run_piv_step(const fs::path& out, const fs::path& scenes_dir, int binning) {
-  std::printf("\n8. PIV: a simulated experiment in the reactor (a Lamb-Oseen vortex on the sheet), evaluated on the "
+// 9. PIV: a simulated experiment in the reactor, corrected and evaluated against the truth.
+DemoPivSummary run_piv_step(const fs::path& out, const fs::path& scenes_dir, int binning, const Camera& recovered) {
+  std::printf("\n9. PIV: a simulated experiment in the reactor (a Lamb-Oseen vortex on the sheet), evaluated on the "
               "reference, corrected and uncorrected pairs against the truth:\n");
-  const DemoPivSummary p =
-      run_piv_demo((out / "piv").string(), scenes_dir.string(), binning, (out / "correct" / "cache").string());
+  const DemoPivSummary p = run_piv_demo((out / "piv").string(), scenes_dir.string(), binning,
+                                        (out / "correct" / "cache").string(), &recovered);
   std::printf("   %dx%d px, %zu tracers (%g ppp, %g px images, %d-bit), largest displacement %.2f px; simulated in "
               "%.1f s\n",
               p.width, p.height, p.tracers, p.density_ppp, p.particle_px, p.bit_depth, p.max_displacement_px,
@@ -116,6 +146,11 @@ void run_piv_step(const fs::path& out, const fs::path& scenes_dir, int binning) 
               "unmasked centres); corrected in windows clear of the mask %.4f px (%d)\n",
               p.no_glass.rms_px, p.no_glass.vectors, p.corrected.rms_px, p.corrected.vectors, p.uncorrected.rms_px,
               p.uncorrected.vectors, p.corrected_inner.rms_px, p.corrected_inner.vectors);
+  if (p.own_model)
+    std::printf("     corrected with the demo's own camera (calibrated in step 7: %.3f px from the truth's projection, "
+                "%.3f px after the implied rotation; aligned in step 8: centre %.3f mm from the truth's) %.4f px (%d)\n",
+                p.own_projection_difference_px, p.own_projection_difference_rotated_px, p.own_pose_error_mm,
+                p.corrected_own_model.rms_px, p.corrected_own_model.vectors);
   std::printf("   %.1f%% of the camera's pixels masked by the correction; masked of the sheet grid's fluid region: one "
               "camera %.1f%%, five (binned %dx%d) %.1f%% (their centre camera alone %.1f%%)\n",
               100 * p.masked_pixel_fraction, 100 * p.one_camera_sheet_masked, p.five_binning, p.five_binning,
@@ -127,6 +162,7 @@ void run_piv_step(const fs::path& out, const fs::path& scenes_dir, int binning) 
               fs::path(p.error_uncorrected_png).filename().c_str());
   std::printf("   report: %s, %s (%.1f s for this step)\n", p.html.c_str(),
               fs::path(p.metrics_json).filename().c_str(), p.seconds);
+  return p;
 }
 
 void run_demo(const std::string& out_dir) {
@@ -264,11 +300,13 @@ void run_demo(const std::string& out_dir) {
   std::printf("   %-40s truth | accumulation | least squares | mask (sheet grid)\n", corr.five_png.c_str());
 
 
-  // 7. Alignment: the model placed on a photograph of the setup.
-  run_alignment_step(out, scenes_dir, kBinning);
+  // 7. The reactor's camera calibrated; 8. placed on a photograph of the setup.
+  const Camera calibrated = calibrate_reactor_camera(out, read_camera((cameras_dir / "example.yaml").string()), kBinning,
+                                                     targets_dir / "charuco_11x8_15mm.yaml");
+  const DemoAlignmentSummary al = run_alignment_step(out, scenes_dir, kBinning, calibrated);
 
-  // 8. PIV: a simulated experiment, corrected and evaluated against the truth.
-  run_piv_step(out, scenes_dir, kBinning);
+  // 9. PIV: a simulated experiment, corrected with the true and the recovered camera, evaluated against the truth.
+  const DemoPivSummary piv = run_piv_step(out, scenes_dir, kBinning, *al.recovered);
 
   std::printf("\nNext: `glasspiv camera --help`, `glasspiv calib --help`, `glasspiv target --help`, "
               "`glasspiv render --help`, `glasspiv correct --help`, `glasspiv coverage --help`, `glasspiv align --help`, "

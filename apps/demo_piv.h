@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "calib/camera.h"
+
 namespace glasspiv {
 
 // RMS of |measured - true| (px) over the scored vectors.
@@ -37,6 +39,13 @@ struct DemoPivSummary {
   // wherever the truth exists).
   DemoPivScore no_glass, corrected, uncorrected;
   DemoPivScore corrected_inner;  // windows with no masked pixel at all (what the mask's rim costs)
+  // Corrected with the camera the demo recovered (own calibration and alignment) instead of the truth.
+  bool own_model = false;
+  DemoPivScore corrected_own_model;
+  double own_pose_error_mm = 0;             // its camera centre from the truth's
+  double own_projection_difference_px = 0;  // its intrinsics against the truth's, RMS over the image at 1 m
+  double own_projection_difference_rotated_px = 0;  // the same after the rotation it implies
+  double own_model_seconds = 0;
   double masked_pixel_fraction = 0;  // of the camera grid, by the correction's mask
   // The rectified sheet grid: masked fraction of its fluid region (correct/cell_mask.h).
   double one_camera_sheet_masked = 0;  // reactor.yaml's camera, on its grid
@@ -54,8 +63,10 @@ struct DemoPivSummary {
 // their camera files where the scenes expect them); binning: the camera's
 // read-out binning; five_cache_dir: where the five cameras' maps and
 // operators are cached (the correction step's cache, validated on reading; ""
-// for none), at twice that binning as the correction step uses.
+// for none), at twice that binning as the correction step uses. recovered
+// (optional): the camera the demo calibrated and aligned itself (binned, with
+// its pose); the frames are corrected with it too and scored against the same truth.
 DemoPivSummary run_piv_demo(const std::string& folder, const std::string& scenes_dir, int binning,
-                            const std::string& five_cache_dir);
+                            const std::string& five_cache_dir, const Camera* recovered = nullptr);
 
 }  // namespace glasspiv
