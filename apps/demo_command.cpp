@@ -19,12 +19,14 @@
 #include "apps/demo_correction.h"
 #include "apps/demo_piv.h"
 #include "apps/demo_render.h"
+#include "apps/demo_report.h"
 #include "apps/plots.h"
 #include "calib/io/camera_file.h"
 #include "calib/lens_maps.h"
 #include "targets/target_spec.h"
 #include "targets/target_yaml.h"
 #include "util/atomic_file.h"
+#include "util/stopwatch.h"
 
 namespace glasspiv::demo_cameras {
 const std::vector<std::pair<std::string_view, std::string_view>>& embedded_files();
@@ -57,7 +59,8 @@ std::pair<double, double> pose_difference(const Camera& a, const Camera& b) {
 // calibrates its camera: the intrinsics the alignment and the PIV step use.
 // The board is photographed from where it spans 60 % to 40 % of the image's
 // width, as step 4's 300-450 mm do for its camera.
-Camera calibrate_reactor_camera(const fs::path& out, const Camera& reactor, int binning, const fs::path& target) {
+DemoCalibrationSummary calibrate_reactor_camera(const fs::path& out, const Camera& reactor, int binning,
+                                                const fs::path& target) {
   std::printf("\n7. The reactor's camera (binned %dx%d) calibrated from 20 synthetic photos of the ChArUco board, as in "
               "step 4:\n", binning, binning);
   const Camera truth{"reactor_truth", binned(reactor.model, binning), std::nullopt,
@@ -76,7 +79,7 @@ Camera calibrate_reactor_camera(const fs::path& out, const Camera& reactor, int 
               views.near_mm, views.far_mm, c.rms_px, 100 * c.focal_error_rel, c.principal_point_error_px,
               c.truth_difference_rms_px, c.truth_difference_rotated_rms_px);
   std::printf("   report: %s\n", c.report_html.c_str());
-  return *c.fitted;
+  return c;
 }
 
 // 8. Alignment: the model placed on a photograph of the setup.
@@ -166,6 +169,7 @@ DemoPivSummary run_piv_step(const fs::path& out, const fs::path& scenes_dir, int
 }
 
 void run_demo(const std::string& out_dir) {
+  const Stopwatch total;
   const fs::path out(out_dir);
   // The demo owns its folder: anything in it that is not a plain file or folder is refused before any work.
   check_output_folder(out_dir, "-o");
@@ -301,12 +305,27 @@ void run_demo(const std::string& out_dir) {
 
 
   // 7. The reactor's camera calibrated; 8. placed on a photograph of the setup.
-  const Camera calibrated = calibrate_reactor_camera(out, read_camera((cameras_dir / "example.yaml").string()), kBinning,
-                                                     targets_dir / "charuco_11x8_15mm.yaml");
-  const DemoAlignmentSummary al = run_alignment_step(out, scenes_dir, kBinning, calibrated);
+  const DemoCalibrationSummary reactor_calibration = calibrate_reactor_camera(
+      out, read_camera((cameras_dir / "example.yaml").string()), kBinning, targets_dir / "charuco_11x8_15mm.yaml");
+  const DemoAlignmentSummary al = run_alignment_step(out, scenes_dir, kBinning, *reactor_calibration.fitted);
 
   // 9. PIV: a simulated experiment, corrected with the true and the recovered camera, evaluated against the truth.
   const DemoPivSummary piv = run_piv_step(out, scenes_dir, kBinning, *al.recovered);
+
+  // One page and one metrics file for the whole session.
+  DemoSession session_pages;
+  session_pages.formats_worst_px = worst_px;
+  session_pages.calibration = &session;
+  session_pages.render = &render;
+  session_pages.correction = &corr;
+  session_pages.reactor_calibration = &reactor_calibration;
+  session_pages.alignment = &al;
+  session_pages.piv = &piv;
+  session_pages.binning = kBinning;
+  session_pages.seconds = total.seconds();
+  const DemoReportFiles report = write_demo_report(out_dir, session_pages);
+  std::printf("\nThe whole session on one page: %s (every figure in %s; %.0f s in all)\n", report.html.c_str(),
+              report.metrics_json.c_str(), session_pages.seconds);
 
   std::printf("\nNext: `glasspiv camera --help`, `glasspiv calib --help`, `glasspiv target --help`, "
               "`glasspiv render --help`, `glasspiv correct --help`, `glasspiv coverage --help`, `glasspiv align --help`, "
