@@ -313,6 +313,7 @@ void register_calib_commands(CLI::App& app) {
   CLI::App* calib = app.add_subcommand("calib", "Calibration sessions: detect targets, fit intrinsics, report");
   calib->require_subcommand(1);
   register_calib_detect_command(*calib);
+  register_calib_next_command(*calib);
 
   auto in = std::make_shared<IntrinsicsOptions>();
   CLI::App* i = calib->add_subcommand(

@@ -17,5 +17,6 @@ void register_piv_command(CLI::App& app);
 void register_simulate_command(CLI::App& app);
 // Called by register_calib_commands on its `calib` group.
 void register_calib_detect_command(CLI::App& calib);
+void register_calib_next_command(CLI::App& calib);
 
 }  // namespace glasspiv
