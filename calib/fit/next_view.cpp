@@ -362,9 +362,11 @@ NextView propose_next_view(const IntrinsicFit& fit, const Observations& observat
 }
 
 std::string describe_view(const CandidateView& view, int width_px, int height_px) {
-  const std::string where = fmt::format("with its centre in the {} of the image, at ~{:.0f} mm",
+  // Two significant digits: a distance to hold the board at, not a measurement.
+  const double unit = std::pow(10.0, std::floor(std::log10(std::max(view.distance_mm, 1e-9))) - 1);
+  const std::string where = fmt::format("with its centre in the {} of the image, at ~{:g} mm",
                                         region_name(view.centre_px, width_px, height_px),
-                                        std::round(view.distance_mm / 10) * 10);
+                                        std::round(view.distance_mm / unit) * unit);
   if (std::abs(view.tilt_deg) < 0.5) return "hold the board facing the camera (parallel to the sensor), " + where;
   const double a = std::fmod(view.tilt_axis_deg + 360, 180);
   const std::string axis = std::abs(a) < 1 || std::abs(a - 180) < 1 ? "the horizontal axis"
@@ -377,8 +379,9 @@ std::string describe_view(const CandidateView& view, int width_px, int height_px
   const Eigen::Vector2d u(std::cos(view.tilt_axis_deg * kDegree), std::sin(view.tilt_axis_deg * kDegree));
   const Eigen::Vector2d n(-u.y(), u.x());
   const Eigen::Vector2d nearer = view.tilt_deg > 0 ? Eigen::Vector2d(-n) : n;
-  return fmt::format("tilt the board ~{:.0f} deg about {} (its {} edge nearer the camera), {}",
-                     std::abs(view.tilt_deg), axis, direction_name(nearer), where);
+  const std::string side = direction_name(nearer);
+  return fmt::format("tilt the board ~{:.0f} deg about {} (its {} {} nearer the camera), {}", std::abs(view.tilt_deg),
+                     axis, side, side.find('-') == std::string::npos ? "edge" : "corner", where);
 }
 
 IntrinsicFit fit_with_camera_held(const CameraModel& camera, const Observations& observations, double outlier_k) {

@@ -145,7 +145,8 @@ NextView propose_next_view(const IntrinsicFit& fit, const Observations& observat
                            const std::function<void(int done, int total)>& progress = {});
 
 // "tilt the board ~50 deg about the vertical axis (its right edge nearer the
-// camera), with its centre in the top-left of the image, at ~600 mm".
+// camera), with its centre in the top-left of the image, at ~600 mm" (about a
+// diagonal axis: "its top-left corner nearer"); the distance to 2 digits.
 std::string describe_view(const CandidateView& view, int width_px, int height_px);
 
 // A fit-like state for a camera fitted elsewhere: its intrinsics held, each
