@@ -39,7 +39,7 @@ cams="$src/data/cameras"
 
 # --help on every command.
 for cmd in "" "camera" "camera convert" "camera show" "camera compare" "demo" "calib" "calib detect" \
-  "calib intrinsics" "calib report" "target" "target print" "target show" "render" "correct" "coverage" \
+  "calib intrinsics" "calib report" "calib next" "target" "target print" "target show" "render" "correct" "coverage" \
   "align" "align pose" "align check" "align refine" "align sensitivity" "piv" "simulate"; do
   # shellcheck disable=SC2086
   "$glasspiv" $cmd --help >"$work/out" 2>&1 && grep -q "Usage" "$work/out" && ok || fail "glasspiv $cmd --help"
@@ -117,6 +117,14 @@ done
 expect_ok "$glasspiv" camera show "$work/left.cameramodel"
 expect_ok "$glasspiv" calib report "$work/left_obs.yaml" -o "$work/left_report2"
 expect_ok "$glasspiv" calib intrinsics "$work/left_obs.yaml" -o "$work/left2.yaml" --no-report
+# Where the board should go next: the pose in words, the pictures and the JSON;
+# the corners must be the target's.
+expect_ok "$glasspiv" calib next "$work/left_obs.yaml" --target "$left/target.yaml" -o "$work/left_next"
+grep -q "^next view: tilt the board" "$work/out" && [ -s "$work/left_next/placement.png" ] \
+  && [ -s "$work/left_next/after.png" ] && grep -q '"worst_after_px"' "$work/left_next/next_view.json" && ok \
+  || fail "calib next wrote no proposal"
+expect_error 2 "left_obs.yaml" "target" -- "$glasspiv" calib next "$work/left_obs.yaml" \
+  --target "$src/data/targets/chessboard_9x6.yaml" -o "$work/x_next"
 "$glasspiv" camera compare "$work/left.cameramodel" "$work/left2.yaml" >"$work/out" 2>&1
 # Saved observations are the detected floats exactly; only Ceres' threaded sums
 # may differ in the last bits, far below 1e-6 px.
