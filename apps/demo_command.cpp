@@ -158,7 +158,13 @@ DemoPivSummary run_piv_step(const fs::path& out, const fs::path& scenes_dir, int
               "camera %.1f%%, five (binned %dx%d) %.1f%% (their centre camera alone %.1f%%)\n",
               100 * p.masked_pixel_fraction, 100 * p.one_camera_sheet_masked, p.five_binning, p.five_binning,
               100 * p.five_sheet_masked, 100 * p.five_centre_sheet_masked);
-  if (!p.five_piv) std::printf("   five cameras: coverage only; %s\n", p.five_piv_note.c_str());
+  const SheetPivSummary& f = p.sheet;
+  std::printf("   five cameras (binned %dx%d) on the sheet grid (%dx%d cells of %.3f mm), PIV against the sheet truth: all "
+              "five %.4f px RMS (%d vectors; %.4f px on the centre camera's %d), the centre camera alone %.4f px; "
+              "%.1f s\n",
+              p.five_binning, p.five_binning, f.grid.cols, f.grid.rows, f.grid.mm_per_px, f.all.least_squares.rms_px,
+              f.all.least_squares.vectors, f.all_on_centre_vectors.rms_px, f.all_on_centre_vectors.vectors,
+              f.centre.least_squares.rms_px, p.five_seconds);
   std::printf("   %-40s frame A through the glass\n", p.distorted_png.c_str());
   std::printf("   %-40s frame A corrected onto the glass-removed camera grid\n", p.corrected_png.c_str());
   std::printf("   %-40s |measured - true|, corrected; also %s\n", p.error_corrected_png.c_str(),

@@ -5,10 +5,13 @@
 // reference pair, on the distorted pair corrected onto the glass-removed camera
 // grid, and on the distorted pair as recorded, each scored against the exact
 // displacement; the sheet grid's masked area with one camera and with the five
-// of reactor_5cams.yaml; pictures, an HTML page and metrics.json.
+// of reactor_5cams.yaml, and PIV on the sheet grid reconstructed from all five
+// and from the centre one alone (apps/demo_piv_sheet.h); pictures, an HTML
+// page and metrics.json.
 #include <string>
 #include <vector>
 
+#include "apps/demo_piv_sheet.h"
 #include "calib/camera.h"
 
 namespace glasspiv {
@@ -52,8 +55,7 @@ struct DemoPivSummary {
   double five_centre_sheet_masked = 0, five_sheet_masked = 0;  // reactor_5cams.yaml: centre camera alone, all five
   int five_binning = 0;
   double five_seconds = 0;
-  bool five_piv = false;  // whether a five-camera PIV was run (not yet: five_piv_note says so)
-  std::string five_piv_note;
+  SheetPivSummary sheet;  // reactor_5cams.yaml: PIV on the sheet grid, five cameras and the centre one alone
   std::string distorted_png, corrected_png, error_corrected_png, error_uncorrected_png, vectors_txt, html,
       metrics_json;
   double seconds = 0;

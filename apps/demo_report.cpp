@@ -110,6 +110,8 @@ DemoReportFiles write_demo_report(const std::string& out_dir, const DemoSession&
   row("", "RMS error, uncorrected", fmt::format("{:.3f} px", p9.uncorrected.rms_px), "");
   row("", "masked share of the sheet's fluid region: one camera / five",
       fmt::format("{:.1f} % / {:.1f} %", 100 * p9.one_camera_sheet_masked, 100 * p9.five_sheet_masked), "");
+  row("", "on the sheet grid: RMS error, five cameras / the centre camera alone",
+      fmt::format("{:.4f} px / {:.4f} px", p9.sheet.all.least_squares.rms_px, p9.sheet.centre.least_squares.rms_px), "");
   page += "</table>\n";
 
   page += "<h2>Calibration (step 4)</h2>\n<div class=\"row\">";
@@ -132,6 +134,12 @@ DemoReportFiles write_demo_report(const std::string& out_dir, const DemoSession&
   page += "</div>\n<div class=\"row\">";
   page += figure(out, p9.error_corrected_png, "|measured &minus; true|, corrected frames.");
   page += figure(out, p9.error_uncorrected_png, "|measured &minus; true|, uncorrected frames.");
+  page += "</div>\n<h3>One camera against five, on the sheet grid</h3>\n<div class=\"row\">";
+  page += figure(out, p9.sheet.centre.frame_a_png, "Frame A from the centre camera alone (masked cells dark).");
+  page += figure(out, p9.sheet.all.frame_a_png, "Frame A from all five cameras.");
+  page += "</div>\n<div class=\"row\">";
+  page += figure(out, p9.sheet.centre.error_png, "|measured &minus; true|, the centre camera alone.");
+  page += figure(out, p9.sheet.all.error_png, "|measured &minus; true|, five cameras.");
   page += "</div>\n</body></html>\n";
 
   nlohmann::json j = {
@@ -158,6 +166,8 @@ DemoReportFiles write_demo_report(const std::string& out_dir, const DemoSession&
         {"uncorrected", score_json(p9.uncorrected)},
         {"corrected_own_model", p9.own_model ? score_json(p9.corrected_own_model) : nlohmann::json()},
         {"one_camera_sheet_masked", p9.one_camera_sheet_masked}, {"five_cameras_sheet_masked", p9.five_sheet_masked},
+        {"sheet_grid_rms_px",
+         {{"five_cameras", p9.sheet.all.least_squares.rms_px}, {"centre_alone", p9.sheet.centre.least_squares.rms_px}}},
         {"seconds", p9.seconds}}},
   };
   DemoReportFiles files;
