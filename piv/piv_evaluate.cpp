@@ -228,7 +228,9 @@ PivField evaluate_piv(const cv::Mat& frame_a, const cv::Mat& frame_b, const cv::
         },
         poll);
     done_before += count;
-    field.validation = normalised_median_test(g.cols, g.rows, u, v, flags, options.validation);
+    MedianTestOptions validation = options.validation;
+    validation.threads = threads;
+    field.validation = normalised_median_test(g.cols, g.rows, u, v, flags, validation);
     if (pass + 1 < grids.size()) {
       predictor_u = u;
       predictor_v = v;

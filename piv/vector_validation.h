@@ -44,6 +44,7 @@ struct MedianTestOptions {
   double threshold = 2.0;
   int min_neighbours = 3;
   bool follow_gradient = true;  // see above
+  int threads = 1;  // rows tested in parallel (<= 0: all cores); the result does not depend on it
 };
 
 struct MedianTestCounts {

@@ -126,7 +126,9 @@ TEST(NormalisedMedianTest, FollowsTheGradientAtAMasksEdge) {
   EXPECT_EQ(n.outliers, 1);
   EXPECT_EQ(f.flags[at], VectorFlag::replaced);
   for (std::size_t i = 0; i < f.flags.size(); ++i)
-    if (static_cast<int>(i) != at) EXPECT_NE(f.flags[i], VectorFlag::replaced) << i;
+    if (static_cast<int>(i) != at) {
+      EXPECT_NE(f.flags[i], VectorFlag::replaced) << i;
+    }
   EXPECT_NEAR(f.u[at], truth_u, 0.05);  // the neighbours' noise, not a grid step (0.5 px)
   EXPECT_NEAR(f.v[at], truth_v, 0.05);
 }
