@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "apps/calibration_report.h"
+#include "apps/cli_checks.h"
 #include "apps/commands.h"
 #include "apps/photo_detection.h"
 #include "calib/fit/multi_start.h"
@@ -64,18 +65,6 @@ CLI::Validator finite_range(double min, double max, bool zero_too = false) {
         return "";
       },
       "NUMBER in " + range);
-}
-
-// Fit and report errors from calib/fit name no file (the library works on
-// Observations, not files): name the observations (or photos) they came from.
-template <typename F>
-auto naming_file(const std::string& file, F&& work) -> decltype(work()) {
-  try {
-    return work();
-  } catch (const InputError& e) {
-    if (!e.file().empty()) throw;
-    throw InputError(file, e.field(), e.problem());
-  }
 }
 
 void add_fit_options(CLI::App* app, FitCliOptions& o) {

@@ -47,17 +47,6 @@ struct NextCommandOptions {
   NextViewOptions next;
 };
 
-// Errors from the library name no file: name the observations they concern.
-template <typename F>
-auto naming_file(const std::string& file, F&& work) -> decltype(work()) {
-  try {
-    return work();
-  } catch (const InputError& e) {
-    if (!e.file().empty()) throw;
-    throw InputError(file, e.field(), e.problem());
-  }
-}
-
 // The observed corners must be the target's: the same id at the same board point.
 void check_target_matches(const Observations& observations, const std::vector<BoardCorner>& corners,
                           const std::string& observations_path, const std::string& target_path) {

@@ -6,7 +6,22 @@
 
 #include <CLI/CLI.hpp>
 
+#include "util/input_error.h"
+
 namespace glasspiv {
+
+// Runs work(); an InputError it throws that names no file (the fit and other
+// libraries work on data, not files) is rethrown naming `file`, the input the
+// data came from.
+template <typename F>
+auto naming_file(const std::string& file, F&& work) -> decltype(work()) {
+  try {
+    return work();
+  } catch (const InputError& e) {
+    if (!e.file().empty()) throw;
+    throw InputError(file, e.field(), e.problem());
+  }
+}
 
 // Applied by main() to every option of every (sub)command, once all are
 // registered: a FLOAT value must be a finite number (no nan, inf, 1e999); an

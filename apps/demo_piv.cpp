@@ -76,12 +76,7 @@ DemoPivScore score(const PivField& f, const CameraTruth& truth, const cv::Mat& u
     ++s.vectors;
   }
   s.rms_px = s.vectors ? std::sqrt(sum / s.vectors) : NAN;
-  // One flat cell per vector over the image (plots.h, cells).
-  errors->grid.cols = f.grid.cols;
-  errors->grid.rows = f.grid.rows;
-  errors->grid.step_x_px = f.grid.cols > 1 ? f.grid.x_px(1) - f.grid.x_px(0) : 1;
-  errors->grid.step_y_px = f.grid.rows > 1 ? f.grid.y_px(1) - f.grid.y_px(0) : 1;
-  errors->summarize();
+  use_vector_cells(f.grid, errors);
   return s;
 }
 

@@ -93,11 +93,7 @@ SheetPivScore score(const PivField& f, const std::vector<Eigen::Vector2d>& truth
   if (errors) {
     // One flat cell per vector over the image (plots.h, cells).
     errors->vector_px = std::move(e);
-    errors->grid.cols = f.grid.cols;
-    errors->grid.rows = f.grid.rows;
-    errors->grid.step_x_px = f.grid.cols > 1 ? f.grid.x_px(1) - f.grid.x_px(0) : 1;
-    errors->grid.step_y_px = f.grid.rows > 1 ? f.grid.y_px(1) - f.grid.y_px(0) : 1;
-    errors->summarize();
+    use_vector_cells(f.grid, errors);
   }
   return s;
 }
@@ -178,6 +174,14 @@ cv::Mat as_image(const std::vector<float>& l, const SheetGrid& grid) {
 }
 
 }  // namespace
+
+void use_vector_cells(const InterrogationGrid& g, GridValues* errors) {
+  errors->grid.cols = g.cols;
+  errors->grid.rows = g.rows;
+  errors->grid.step_x_px = g.cols > 1 ? g.x_px(1) - g.x_px(0) : 1;
+  errors->grid.step_y_px = g.rows > 1 ? g.y_px(1) - g.y_px(0) : 1;
+  errors->summarize();
+}
 
 SheetPivSummary run_sheet_piv(const CorrectionScene& cs, const std::string& centre_camera, const Flow& flow,
                               const PivExperimentSettings& base, int binning, const std::string& cache_dir,

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "apps/correction_setup.h"
+#include "calib/lens_maps.h"
 #include "piv/piv_evaluate.h"
 #include "sim/flows.h"
 #include "sim/piv_experiment.h"
@@ -63,6 +64,10 @@ struct SheetPivSummary {
   int operators_reused = 0;               // of the cameras' operators, loaded from the cache
   double simulate_seconds = 0, operator_seconds = 0, reconstruct_seconds = 0, piv_seconds = 0, seconds = 0;
 };
+
+// errors->grid as one flat cell per vector of the PIV grid g (plots.h,
+// cells), then summarised; errors->vector_px must hold one entry per vector.
+void use_vector_cells(const InterrogationGrid& g, GridValues* errors);
 
 // scene: a multi-camera scene (read_correction_scene; no camera need be
 // prepared: cs.cameras is not used); centre_camera: the name of the camera
