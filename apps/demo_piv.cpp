@@ -196,6 +196,14 @@ std::string write_page(const fs::path& out, const DemoPivSummary& s) {
                       "(masked pixels dark).</figcaption></figure>",
                       file_name(s.corrected_png));
   page += "</div>\n";
+  page += "<div class=\"pair\">";
+  page += fmt::format("<figure><img src=\"{}\"><figcaption>The true displacement where the corrected frames are "
+                      "scored.</figcaption></figure>",
+                      file_name(s.true_field_png));
+  page += fmt::format("<figure><img src=\"{}\"><figcaption>The displacement measured on the corrected frames."
+                      "</figcaption></figure>",
+                      file_name(s.measured_field_png));
+  page += "</div>\n";
   page += fmt::format("<figure><img src=\"{}\"><figcaption>|measured &minus; true| per vector, corrected frames; grey: "
                       "not scored.</figcaption></figure>\n",
                       file_name(s.error_corrected_png));
@@ -378,6 +386,24 @@ DemoPivSummary run_piv_demo(const std::string& folder, const std::string& scenes
   write_magnitude_png(corr_err, s.width, s.height, labels, s.error_corrected_png);
   labels.title = "PIV error, uncorrected frames (measured - true)";
   write_magnitude_png(raw_err, s.width, s.height, labels, s.error_uncorrected_png);
+  // The true and the measured (corrected) field, where the corrected one is scored.
+  GridValues true_field, measured_field;
+  true_field.vector_px.assign(corr.size(), Eigen::Vector2d::Constant(NAN));
+  measured_field.vector_px = true_field.vector_px;
+  for (std::size_t i = 0; i < corr.size(); ++i) {
+    if (!corr_err.vector_px[i].allFinite()) continue;
+    true_field.vector_px[i] = Eigen::Vector2d(cam.truth.u_px[i], cam.truth.v_px[i]);
+    measured_field.vector_px[i] = Eigen::Vector2d(corr.u_px[i], corr.v_px[i]);
+  }
+  use_vector_cells(corr.grid, &true_field);
+  use_vector_cells(corr.grid, &measured_field);
+  s.true_field_png = (out / "field_true.png").string();
+  s.measured_field_png = (out / "field_measured_corrected.png").string();
+  PlotLabels field_labels{"true displacement (glass-removed camera grid)", "|displacement| px"};
+  field_labels.cells = true;
+  write_vector_field_png(true_field, s.width, s.height, field_labels, s.true_field_png);
+  field_labels.title = "measured displacement, corrected frames";
+  write_vector_field_png(measured_field, s.width, s.height, field_labels, s.measured_field_png);
   s.vectors_txt = (out / "vectors_corrected.txt").string();
   write_vector_files(s.vectors_txt, "", corr,
                      {"glasspiv demo step 9: the reactor camera's corrected frames, a Lamb-Oseen vortex",

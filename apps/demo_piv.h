@@ -56,7 +56,8 @@ struct DemoPivSummary {
   int five_binning = 0;
   double five_seconds = 0;
   SheetPivSummary sheet;  // reactor_5cams.yaml: PIV on the sheet grid, five cameras and the centre one alone
-  std::string distorted_png, corrected_png, error_corrected_png, error_uncorrected_png, vectors_txt, html,
+  std::string distorted_png, corrected_png, true_field_png, measured_field_png, error_corrected_png,
+      error_uncorrected_png, vectors_txt, html,
       metrics_json;
   double seconds = 0;
 };

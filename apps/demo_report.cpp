@@ -132,6 +132,9 @@ DemoReportFiles write_demo_report(const std::string& out_dir, const DemoSession&
   page += figure(out, p9.distorted_png, "Frame A through the glass.");
   page += figure(out, p9.corrected_png, "Frame A corrected (masked pixels dark).");
   page += "</div>\n<div class=\"row\">";
+  page += figure(out, p9.true_field_png, "The true displacement.");
+  page += figure(out, p9.measured_field_png, "Measured on the corrected frames.");
+  page += "</div>\n<div class=\"row\">";
   page += figure(out, p9.error_corrected_png, "|measured &minus; true|, corrected frames.");
   page += figure(out, p9.error_uncorrected_png, "|measured &minus; true|, uncorrected frames.");
   page += "</div>\n<h3>One camera against five, on the sheet grid</h3>\n<div class=\"row\">";
