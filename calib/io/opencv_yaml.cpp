@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 #include <set>
+#include <stdexcept>
 
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
@@ -33,6 +34,13 @@ std::string describe(const cv::Exception& e, int added_lines) {
       return fmt::format("malformed OpenCV FileStorage YAML, line {}: {}", line - added_lines, func.substr(close + 3));
   }
   return "OpenCV FileStorage cannot read it: " + e.err;
+}
+
+// OpenCV 4.6's parser also fails with standard exceptions on some malformed
+// texts (std::length_error from a string it sizes from the input): the file's
+// fault, not an internal error.
+std::string describe(const std::exception& e) {
+  return std::string("OpenCV FileStorage's parser failed on it (") + e.what() + ")";
 }
 
 // OpenCV's FileStorage parser recurses once per level of nesting, so a file
@@ -142,6 +150,10 @@ class Reader {
       return read();
     } catch (const cv::Exception& e) {
       fail(field, describe(e, added_lines_));
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      fail(field, describe(e));
     }
   }
 
@@ -286,6 +298,10 @@ std::vector<Camera> parse(std::string_view contents, const std::string& path) {
       throw InputError(path, "", "OpenCV FileStorage cannot open it");
   } catch (const cv::Exception& e) {
     throw InputError(path, "", describe(e, added_lines));
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path, "", describe(e));
   }
   const Reader r(path, added_lines);
   const cv::FileNode root = r.guarded("", [&] { return fs.root(); });
