@@ -251,6 +251,9 @@ class Reader {
 // "%YAML:1.0" line is its own spelling of the directive, not YAML's, so it is
 // left out; a second document is refused before either parser sees it
 // (yaml-cpp's LoadAll itself runs away on some damaged multi-document texts).
+// The parser also loops on some texts yaml-cpp reads as a mapping whose keys
+// are indented (every reproducer so far), so the top level must start in the
+// first column, as FileStorage writes it.
 void check_one_mapping(std::string_view contents, const std::string& path) {
   std::string yaml(contents);
   int skipped_lines = 0;
@@ -268,8 +271,15 @@ void check_one_mapping(std::string_view contents, const std::string& path) {
     const bool marker = l.rfind("---", 0) == 0 || l.rfind("...", 0) == 0;
     if (marker && content)
       throw InputError(path, "", fmt::format("line {}: a second YAML document; a camera file holds one", line + 1));
-    if (!marker && l.find_first_not_of(" \t\r") != std::string_view::npos && l[l.find_first_not_of(" \t\r")] != '#')
+    const std::size_t indent = l.find_first_not_of(" \t\r");
+    if (!marker && indent != std::string_view::npos && l[indent] != '#') {
+      if (!content && indent > 0)
+        throw InputError(path, "",
+                         fmt::format("line {}: the top-level keys must start in the first column, as OpenCV "
+                                     "FileStorage writes them",
+                                     line + 1));
       content = true;
+    }
     pos = eol + 1;
   }
   try {
