@@ -10,6 +10,8 @@
 #   GLASSPIV_FUZZ_JOBS     parallel fuzzing processes per harness (default 1)
 #   GLASSPIV_FUZZ_PARALLEL harnesses fuzzed at the same time (default: cores / jobs)
 #   GLASSPIV_FUZZ_BUILD_DIR  (default build-fuzz)
+#   GLASSPIV_FUZZ_SEED     libFuzzer's -seed (default 1: a run explores the same inputs first
+#                          each time, so CI's short runs repeat; 0: a new random seed per run)
 #   GLASSPIV_FUZZ_EXTRA    more libFuzzer flags, e.g. "-dict=... -max_len=4096"
 # A finding (crash, sanitizer report, leak, timeout, out-of-memory, an
 # exception other than InputError) ends the script with status 1; its
@@ -20,6 +22,7 @@ src="$PWD/tests/fuzz"
 build_dir="$(realpath -m "${GLASSPIV_FUZZ_BUILD_DIR:-build-fuzz}")"
 seconds="${GLASSPIV_FUZZ_SECONDS:-20}"
 jobs="${GLASSPIV_FUZZ_JOBS:-1}"
+seed="${GLASSPIV_FUZZ_SEED:-1}"
 cxx="${GLASSPIV_FUZZ_CXX:-clang++-14}"
 cc="${GLASSPIV_FUZZ_CC:-clang-14}"
 
@@ -81,7 +84,7 @@ fuzz_one() {
   # -jobs writes fuzz-<n>.log into the current folder: one folder per harness.
   # shellcheck disable=SC2086
   (cd "$work" && ASAN_OPTIONS="$options" "$build_dir/tests/fuzz/fuzz_$h" . "${corpora[@]}" "${extra[@]}" \
-    -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
+    -max_total_time="$seconds" -seed="$seed" -rss_limit_mb=2048 -timeout=10 -print_final_stats=1 \
     -artifact_prefix="$artifacts/" ${GLASSPIV_FUZZ_EXTRA:-} >"$log" 2>&1)
   rc=$?
   set -e
