@@ -20,6 +20,7 @@
 #include "apps/commands.h"
 #include "apps/html_text.h"
 #include "apps/photo_detection.h"
+#include "apps/plots.h"
 #include "apps/png_file.h"
 #include "calib/fit/multi_start.h"
 #include "calib/fit/next_view.h"
@@ -73,67 +74,11 @@ nlohmann::json number_or_null(double value) {
 
 std::string px(double value) { return std::isfinite(value) ? fmt::format("{:.4f} px", value) : "no figure"; }
 
-// A heat map of |vector| over the image on a common scale [0, top] (so the
-// maps before and after compare by colour), grey where a sample has no figure.
-struct MapPicture {
-  cv::Mat image;
-  double scale = 1;  // picture pixels per image pixel
-  cv::Point origin;  // of the image's pixel (0, 0)
-};
-MapPicture draw_map(const GridValues& values, int width_px, int height_px, double top, const std::string& title) {
-  constexpr int kWidth = 800, kMargin = 40, kBar = 22, kLegend = 90;
-  MapPicture out;
-  out.scale = static_cast<double>(kWidth) / width_px;
-  const int pw = kWidth, ph = std::max(1, static_cast<int>(std::lround(height_px * out.scale)));
-  out.origin = {kMargin, kMargin};
-  out.image = cv::Mat(ph + 2 * kMargin, pw + 2 * kMargin + kLegend, CV_8UC3, cv::Scalar(255, 255, 255));
-  const PixelGrid& g = values.grid;
-  cv::Mat magnitude(g.rows, g.cols, CV_32F), valid(g.rows, g.cols, CV_8U);
-  for (int j = 0; j < g.rows; ++j)
-    for (int i = 0; i < g.cols; ++i) {
-      const Eigen::Vector2d& v = values.vector_px[j * g.cols + i];
-      valid.at<uchar>(j, i) = v.allFinite() ? 255 : 0;
-      magnitude.at<float>(j, i) = v.allFinite() && top > 0 ? static_cast<float>(std::min(1.0, v.norm() / top)) : 0.f;
-    }
-  cv::Mat m, ok, m8, colour;
-  cv::resize(magnitude, m, cv::Size(pw, ph), 0, 0, cv::INTER_LINEAR);
-  cv::resize(valid, ok, cv::Size(pw, ph), 0, 0, cv::INTER_NEAREST);
-  m.convertTo(m8, CV_8U, 255.0);
-  cv::applyColorMap(m8, colour, cv::COLORMAP_VIRIDIS);
-  colour.setTo(cv::Scalar(160, 160, 160), ok == 0);
-  const cv::Rect plot(kMargin, kMargin, pw, ph);
-  colour.copyTo(out.image(plot));
-  cv::rectangle(out.image, plot, cv::Scalar(0, 0, 0), 1);
-  const cv::Rect bar(kMargin + pw + 16, kMargin, kBar, ph);
-  cv::Mat ramp(ph, 1, CV_8U), ramp_colour;
-  for (int y = 0; y < ph; ++y) ramp.at<uchar>(y, 0) = static_cast<uchar>(255 - (255 * y) / std::max(1, ph - 1));
-  cv::applyColorMap(ramp, ramp_colour, cv::COLORMAP_VIRIDIS);
-  cv::resize(ramp_colour, ramp_colour, cv::Size(kBar, ph), 0, 0, cv::INTER_NEAREST);
-  ramp_colour.copyTo(out.image(bar));
-  const auto text = [&](const std::string& s, cv::Point at, double size = 0.45) {
-    cv::putText(out.image, s, at, cv::FONT_HERSHEY_SIMPLEX, size, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  };
-  text(fmt::format("{:.3g}", top), {bar.x + kBar + 4, bar.y + 10});
-  text("0", {bar.x + kBar + 4, bar.y + ph});
-  text("sigma px", {bar.x - 6, bar.y + ph + 22}, 0.4);
-  text(title, {kMargin, 25}, 0.5);
-  text(fmt::format("worst {}   RMS {}   {} of {} samples with a figure", px(values.max_px), px(values.rms_px),
-                   values.valid_count, values.grid.size()),
-       {kMargin, kMargin + ph + 25}, 0.45);
-  return out;
-}
-
-cv::Point to_picture(const MapPicture& p, const Eigen::Vector2d& pixel) {
-  return {p.origin.x + static_cast<int>(std::lround(pixel.x() * p.scale)),
-          p.origin.y + static_cast<int>(std::lround(pixel.y() * p.scale))};
-}
-
-void draw_board(MapPicture& p, const CandidateView& view, int width_px, int height_px) {
+// The proposed board over a map: its outline, corners and centre.
+void draw_board(HeatMapPicture& p, const CandidateView& view) {
   // Drawn into the map's rectangle only: the outline may leave the image.
-  const cv::Rect plot(p.origin.x, p.origin.y, static_cast<int>(std::lround(width_px * p.scale)),
-                      static_cast<int>(std::lround(height_px * p.scale)));
-  cv::Mat map = p.image(plot & cv::Rect(0, 0, p.image.cols, p.image.rows));
-  const auto at = [&](const Eigen::Vector2d& pixel) { return to_picture(p, pixel) - p.origin; };
+  cv::Mat map = p.image(p.plot);
+  const auto at = [&](const Eigen::Vector2d& pixel) { return p.at(pixel.x(), pixel.y()) - p.plot.tl(); };
   std::vector<cv::Point> outline;
   for (const Eigen::Vector2d& q : view.outline_px) outline.push_back(at(q));
   if (outline.size() >= 2) {
@@ -261,12 +206,16 @@ void run_next(const NextCommandOptions& o) {
   // Pictures on one colour scale: the map now.
   fs::create_directories(out);
   const double top = std::isfinite(result.worst_before_px) ? result.worst_before_px : 0;
-  MapPicture placement = draw_map(result.before, w, h, top, "next view: where the board should appear (now: " + kind + ")");
-  draw_board(placement, best, w, h);
+  // One colour scale [0, top] for the three, so before and after compare by colour.
+  const auto map = [&](const GridValues& values, const std::string& title) {
+    return draw_magnitude_map(values, w, h, {title, "sigma px"}, top);
+  };
+  HeatMapPicture placement = map(result.before, "next view: where the board should appear (now: " + kind + ")");
+  draw_board(placement, best);
   write_png(placement_path, placement.image);
-  write_png(before_path, draw_map(result.before, w, h, top, "projection uncertainty now (" + kind + ")").image);
-  MapPicture after = draw_map(result.after, w, h, top, "predicted with the proposed view (" + kind + ")");
-  draw_board(after, best, w, h);
+  write_png(before_path, map(result.before, "projection uncertainty now (" + kind + ")").image);
+  HeatMapPicture after = map(result.after, "predicted with the proposed view (" + kind + ")");
+  draw_board(after, best);
   write_png(after_path, after.image);
 
   std::vector<const CandidateView*> ranked;

@@ -4,23 +4,15 @@
 #include <cmath>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "util/atomic_file.h"
-#include "util/input_error.h"
+#include "apps/png_file.h"
 
 namespace glasspiv {
 namespace {
 
 constexpr int kMaxPlotWidth = 900;
 constexpr int kMargin = 40, kBarWidth = 22, kLegendWidth = 110;
-
-struct Canvas {
-  cv::Mat image;
-  double scale;  // plot pixels per image pixel
-  cv::Rect plot;
-};
 
 double max_magnitude(const GridValues& values) {
   double m = 0;
@@ -29,8 +21,21 @@ double max_magnitude(const GridValues& values) {
   return m;
 }
 
-Canvas draw_heat_map(const GridValues& values, int width_px, int height_px, const PlotLabels& labels, double top) {
-  Canvas c;
+// A figure for the caption: "no figure" where there is none (no nan on a picture).
+std::string figure(double value, const std::string& unit) {
+  return std::isfinite(value) ? fmt::format("{:.4g} {}", value, unit) : "no figure";
+}
+
+}  // namespace
+
+cv::Point HeatMapPicture::at(double x_px, double y_px) const {
+  return {plot.x + static_cast<int>(std::lround(x_px * scale)), plot.y + static_cast<int>(std::lround(y_px * scale))};
+}
+
+HeatMapPicture draw_magnitude_map(const GridValues& values, int width_px, int height_px, const PlotLabels& labels,
+                                  double top) {
+  if (!(top > 0)) top = max_magnitude(values);
+  HeatMapPicture c;
   c.scale = std::min(1.0, static_cast<double>(kMaxPlotWidth) / width_px);
   const int pw = std::max(1, static_cast<int>(std::lround(width_px * c.scale)));
   const int ph = std::max(1, static_cast<int>(std::lround(height_px * c.scale)));
@@ -72,29 +77,21 @@ Canvas draw_heat_map(const GridValues& values, int width_px, int height_px, cons
   text("0", {bar.x + kBarWidth + 4, bar.y + ph});
   text(labels.value_name, {bar.x - 10, bar.y + ph + 22}, 0.4);
   text(labels.title, {kMargin, 25}, 0.55);
-  text(fmt::format("RMS {:.4g} {}   max {:.4g} {}   {} of {} samples valid", values.rms_px, labels.unit,
-                   values.max_px, labels.unit, values.valid_count, values.grid.size()),
+  text(fmt::format("RMS {}   max {}   {} of {} samples valid", figure(values.rms_px, labels.unit),
+                   figure(values.max_px, labels.unit), values.valid_count, values.grid.size()),
        {kMargin, kMargin + ph + 25}, 0.45);
   return c;
 }
 
-void save_png(const cv::Mat& image, const std::string& path) {
-  write_file_atomically_with(path, [&](const std::string& temporary) {
-    if (!cv::imwrite(temporary, image)) throw InputError(path, "", "could not write the PNG");
-  });
-}
-
-}  // namespace
-
 void write_magnitude_png(const GridValues& values, int width_px, int height_px, const PlotLabels& labels,
                          const std::string& path) {
-  save_png(draw_heat_map(values, width_px, height_px, labels, max_magnitude(values)).image, path);
+  write_png(path, draw_magnitude_map(values, width_px, height_px, labels).image);
 }
 
 void write_vector_field_png(const GridValues& values, int width_px, int height_px, const PlotLabels& labels,
                             const std::string& path) {
   const double top = max_magnitude(values);
-  Canvas c = draw_heat_map(values, width_px, height_px, labels, top);
+  HeatMapPicture c = draw_magnitude_map(values, width_px, height_px, labels, top);
   const PixelGrid& g = values.grid;
   // Longest arrow ~ 0.9 of the sample spacing on the plot.
   const double spacing_plot = std::min(g.step_x_px, g.step_y_px) * c.scale;
@@ -110,7 +107,7 @@ void write_vector_field_png(const GridValues& values, int width_px, int height_p
     }
   cv::putText(c.image, fmt::format("arrows x{:.3g}", arrow_scale / c.scale), {c.plot.x + c.plot.width - 130, 25},
               cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  save_png(c.image, path);
+  write_png(path, c.image);
 }
 
 }  // namespace glasspiv
