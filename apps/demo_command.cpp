@@ -157,7 +157,7 @@ DemoPivSummary run_piv_step(const fs::path& out, const fs::path& scenes_dir, int
   std::printf("   %.1f%% of the camera's pixels masked by the correction; masked of the sheet grid's fluid region: one "
               "camera %.1f%%, five (binned %dx%d) %.1f%% (their centre camera alone %.1f%%)\n",
               100 * p.masked_pixel_fraction, 100 * p.one_camera_sheet_masked, p.five_binning, p.five_binning,
-              100 * p.five_sheet_masked, 100 * p.five_centre_sheet_masked);
+              100 * p.sheet.all.masked_fraction, 100 * p.sheet.centre.masked_fraction);
   const SheetPivSummary& f = p.sheet;
   std::printf("   five cameras (binned %dx%d) on the sheet grid (%dx%d cells of %.3f mm), PIV against the sheet truth: all "
               "five %.4f px RMS (%d vectors; %.4f px on the centre camera's %d), the centre camera alone %.4f px; "

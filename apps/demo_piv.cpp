@@ -62,22 +62,12 @@ cv::Mat to8(const cv::Mat& m, const cv::Mat& usable = cv::Mat()) {
 // whose truth exists and whose window centre is usable (use: empty or per
 // pixel); errors (NaN where not scored) per vector for the plot.
 DemoPivScore score(const PivField& f, const CameraTruth& truth, const cv::Mat& use, GridValues* errors) {
-  DemoPivScore s;
-  double sum = 0;
-  errors->vector_px.assign(f.size(), Eigen::Vector2d::Constant(NAN));
+  std::vector<Eigen::Vector2d> truth_px(f.size(), Eigen::Vector2d::Constant(NAN));
   for (std::size_t i = 0; i < f.size(); ++i) {
-    if (f.flags[i] == VectorFlag::invalid || !std::isfinite(truth.u_px[i]) || !std::isfinite(truth.v_px[i])) continue;
     const int x = static_cast<int>(std::lround(f.x_px(i))), y = static_cast<int>(std::lround(f.y_px(i)));
-    if (!use.empty() && use.at<std::uint8_t>(y, x) == 0) continue;
-    const Eigen::Vector2d e(f.u_px[i] - truth.u_px[i], f.v_px[i] - truth.v_px[i]);
-    errors->vector_px[i] = e;
-    sum += e.squaredNorm();
-    s.max_px = std::max(s.max_px, e.norm());
-    ++s.vectors;
+    if (use.empty() || use.at<std::uint8_t>(y, x) != 0) truth_px[i] = Eigen::Vector2d(truth.u_px[i], truth.v_px[i]);
   }
-  s.rms_px = s.vectors ? std::sqrt(sum / s.vectors) : NAN;
-  use_vector_cells(f.grid, errors);
-  return s;
+  return score_vectors(f, truth_px, errors);
 }
 
 // A camera's frames corrected onto its glass-removed grid, from its map through
@@ -159,7 +149,7 @@ std::string write_page(const fs::path& out, const DemoPivSummary& s) {
       "{:.1f}&nbsp;% of the fluid region is masked with this camera; with <code>reactor_5cams.yaml</code> (binned "
       "{}&times;{}) {:.1f}&nbsp;% with its centre camera alone and {:.1f}&nbsp;% with all five.</p>\n",
       100 * s.masked_pixel_fraction, 100 * s.one_camera_sheet_masked, s.five_binning, s.five_binning,
-      100 * s.five_centre_sheet_masked, 100 * s.five_sheet_masked);
+      100 * s.sheet.centre.masked_fraction, 100 * s.sheet.all.masked_fraction);
   const SheetPivSummary& f = s.sheet;
   page += fmt::format(
       "<h2>Five cameras on the sheet grid</h2>\n<p>The same experiment recorded by the five cameras of "
@@ -177,39 +167,27 @@ std::string write_page(const fs::path& out, const DemoPivSummary& s) {
   sheet_row("all five", f.all.masked_fraction, f.all.least_squares);
   sheet_row("all five, on the centre camera's vectors", f.all.masked_fraction, f.all_on_centre_vectors);
   sheet_row("the centre camera alone", f.centre.masked_fraction, f.centre.least_squares);
+  const auto figure = [&](const std::string& src, const std::string& caption) {
+    page += fmt::format("<figure><img src=\"{}\"><figcaption>{}</figcaption></figure>", src, caption);
+  };
   page += "</table>\n<div class=\"pair\">";
-  page += fmt::format("<figure><img src=\"five/{}\"><figcaption>Frame A reconstructed from all five.</figcaption></figure>",
-                      file_name(f.all.frame_a_png));
-  page += fmt::format("<figure><img src=\"five/{}\"><figcaption>From the centre camera alone.</figcaption></figure>",
-                      file_name(f.centre.frame_a_png));
+  figure("five/" + file_name(f.all.frame_a_png), "Frame A reconstructed from all five.");
+  figure("five/" + file_name(f.centre.frame_a_png), "From the centre camera alone.");
   page += "</div>\n<div class=\"pair\">";
-  page += fmt::format("<figure><img src=\"five/{}\"><figcaption>|measured &minus; true|, five cameras.</figcaption></figure>",
-                      file_name(f.all.error_png));
-  page += fmt::format("<figure><img src=\"five/{}\"><figcaption>|measured &minus; true|, the centre camera alone."
-                      "</figcaption></figure>",
-                      file_name(f.centre.error_png));
+  figure("five/" + file_name(f.all.error_png), "|measured &minus; true|, five cameras.");
+  figure("five/" + file_name(f.centre.error_png), "|measured &minus; true|, the centre camera alone.");
+  page += "</div>\n<div class=\"pair\">";
+  figure(file_name(s.distorted_png), "Frame A through the glass, as recorded.");
+  figure(file_name(s.corrected_png), "Frame A corrected onto the glass-removed camera grid (masked pixels dark).");
+  page += "</div>\n<div class=\"pair\">";
+  figure(file_name(s.true_field_png), "The true displacement where the corrected frames are scored.");
+  figure(file_name(s.measured_field_png), "The displacement measured on the corrected frames.");
   page += "</div>\n";
-  page += "<div class=\"pair\">";
-  page += fmt::format("<figure><img src=\"{}\"><figcaption>Frame A through the glass, as recorded.</figcaption></figure>",
-                      file_name(s.distorted_png));
-  page += fmt::format("<figure><img src=\"{}\"><figcaption>Frame A corrected onto the glass-removed camera grid "
-                      "(masked pixels dark).</figcaption></figure>",
-                      file_name(s.corrected_png));
-  page += "</div>\n";
-  page += "<div class=\"pair\">";
-  page += fmt::format("<figure><img src=\"{}\"><figcaption>The true displacement where the corrected frames are "
-                      "scored.</figcaption></figure>",
-                      file_name(s.true_field_png));
-  page += fmt::format("<figure><img src=\"{}\"><figcaption>The displacement measured on the corrected frames."
-                      "</figcaption></figure>",
-                      file_name(s.measured_field_png));
-  page += "</div>\n";
-  page += fmt::format("<figure><img src=\"{}\"><figcaption>|measured &minus; true| per vector, corrected frames; grey: "
-                      "not scored.</figcaption></figure>\n",
-                      file_name(s.error_corrected_png));
-  page += fmt::format("<figure><img src=\"{}\"><figcaption>The same for the uncorrected frames, scored where the "
-                      "corrected ones are.</figcaption></figure>\n",
-                      file_name(s.error_uncorrected_png));
+  figure(file_name(s.error_corrected_png), "|measured &minus; true| per vector, corrected frames; grey: not scored.");
+  page += "\n";
+  figure(file_name(s.error_uncorrected_png),
+         "The same for the uncorrected frames, scored where the corrected ones are.");
+  page += "\n";
   page += fmt::format("<p>Vectors of the corrected frames: <a href=\"{0}\">{0}</a> (glasspiv piv's text format). "
                       "This step ran in {1:.1f} s (simulation {2:.1f} s, PIV {3:.1f} s).</p>\n",
                       file_name(s.vectors_txt), s.seconds, s.simulate_seconds, s.piv_seconds);
@@ -219,13 +197,6 @@ std::string write_page(const fs::path& out, const DemoPivSummary& s) {
   return path;
 }
 
-nlohmann::json score_json(const DemoPivScore& s) {
-  return {{"rms_px", s.rms_px}, {"max_px", s.max_px}, {"vectors", s.vectors}};
-}
-
-nlohmann::json sheet_score_json(const SheetPivScore& s) {
-  return {{"rms_px", s.rms_px}, {"max_px", s.max_px}, {"vectors", s.vectors}};
-}
 
 std::string write_metrics(const fs::path& out, const DemoPivSummary& s) {
   nlohmann::json j = {
@@ -252,18 +223,18 @@ std::string write_metrics(const fs::path& out, const DemoPivSummary& s) {
       {"masked_pixel_fraction", s.masked_pixel_fraction},
       {"sheet_masked_fraction_of_fluid",
        {{"one_camera", s.one_camera_sheet_masked}, {"five_cameras_binning", s.five_binning},
-        {"five_cameras_centre_alone", s.five_centre_sheet_masked}, {"five_cameras", s.five_sheet_masked}}},
+        {"five_cameras_centre_alone", s.sheet.centre.masked_fraction}, {"five_cameras", s.sheet.all.masked_fraction}}},
       {"five_cameras_sheet_grid",
        {{"binning", s.five_binning}, {"grid_mm_per_px", s.sheet.grid.mm_per_px},
         {"cols", s.sheet.grid.cols}, {"rows", s.sheet.grid.rows}, {"piv_cols", s.sheet.piv_cols},
         {"piv_rows", s.sheet.piv_rows}, {"tracers", s.sheet.tracers},
         {"max_displacement_px", s.sheet.max_displacement_px},
-        {"all", {{"masked_fraction", s.sheet.all.masked_fraction}, {"error_px", sheet_score_json(s.sheet.all.least_squares)},
-                 {"error_back_projection_px", sheet_score_json(s.sheet.all.back_projection)}}},
-        {"all_on_centre_vectors_error_px", sheet_score_json(s.sheet.all_on_centre_vectors)},
+        {"all", {{"masked_fraction", s.sheet.all.masked_fraction}, {"error_px", score_json(s.sheet.all.least_squares)},
+                 {"error_back_projection_px", score_json(s.sheet.all.back_projection)}}},
+        {"all_on_centre_vectors_error_px", score_json(s.sheet.all_on_centre_vectors)},
         {"centre_alone", {{"masked_fraction", s.sheet.centre.masked_fraction},
-                          {"error_px", sheet_score_json(s.sheet.centre.least_squares)},
-                          {"error_back_projection_px", sheet_score_json(s.sheet.centre.back_projection)}}}}},
+                          {"error_px", score_json(s.sheet.centre.least_squares)},
+                          {"error_back_projection_px", score_json(s.sheet.centre.back_projection)}}}}},
       {"seconds", {{"simulate", s.simulate_seconds}, {"piv", s.piv_seconds}, {"five_cameras", s.five_seconds}}},
   };
   const std::string path = (out / "metrics.json").string();
@@ -272,6 +243,10 @@ std::string write_metrics(const fs::path& out, const DemoPivSummary& s) {
 }
 
 }  // namespace
+
+nlohmann::json score_json(const DemoPivScore& s) {
+  return {{"rms_px", s.rms_px}, {"max_px", s.max_px}, {"vectors", s.vectors}};
+}
 
 DemoPivSummary run_piv_demo(const std::string& folder, const std::string& scenes_dir, int binning,
                             const std::string& five_cache_dir, const Camera* recovered) {
@@ -422,8 +397,6 @@ DemoPivSummary run_piv_demo(const std::string& folder, const std::string& scenes
     s.five_binning = 2 * binning;
     const CorrectionScene fcs = read_correction_scene((fs::path(scenes_dir) / "reactor_5cams.yaml").string());
     s.sheet = run_sheet_piv(fcs, "cam_centre", flow, e, s.five_binning, five_cache_dir, piv, (out / "five").string());
-    s.five_sheet_masked = s.sheet.all.masked_fraction;
-    s.five_centre_sheet_masked = s.sheet.centre.masked_fraction;
     s.five_seconds = five_clock.seconds();
   }
 

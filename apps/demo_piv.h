@@ -11,16 +11,19 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "apps/demo_piv_sheet.h"
 #include "calib/camera.h"
 
 namespace glasspiv {
 
-// RMS of |measured - true| (px) over the scored vectors.
-struct DemoPivScore {
-  double rms_px = 0, max_px = 0;
-  int vectors = 0;
-};
+// RMS and max of |measured - true| (px) over the scored vectors: the same
+// score on the camera grid as on the sheet grid.
+using DemoPivScore = SheetPivScore;
+
+// {"rms_px", "max_px", "vectors"} (null where there is no figure).
+nlohmann::json score_json(const DemoPivScore& s);
 
 struct DemoPivSummary {
   int width = 0, height = 0;  // the camera, binned
@@ -52,7 +55,6 @@ struct DemoPivSummary {
   double masked_pixel_fraction = 0;  // of the camera grid, by the correction's mask
   // The rectified sheet grid: masked fraction of its fluid region (correct/cell_mask.h).
   double one_camera_sheet_masked = 0;  // reactor.yaml's camera, on its grid
-  double five_centre_sheet_masked = 0, five_sheet_masked = 0;  // reactor_5cams.yaml: centre camera alone, all five
   int five_binning = 0;
   double five_seconds = 0;
   SheetPivSummary sheet;  // reactor_5cams.yaml: PIV on the sheet grid, five cameras and the centre one alone

@@ -66,37 +66,6 @@ std::vector<Eigen::Vector2d> truth_on_vectors(const PivField& f, const SheetGrid
   return out;
 }
 
-// Scores the vectors that are not invalid and have a truth (and, with only,
-// are scored there too); their errors (NaN elsewhere) into *errors for the plot.
-SheetPivScore score(const PivField& f, const std::vector<Eigen::Vector2d>& truth_px, GridValues* errors,
-                    const std::vector<bool>* only = nullptr, std::vector<bool>* scored = nullptr,
-                    Eigen::Vector2d* mean_px = nullptr) {
-  SheetPivScore s;
-  Eigen::Vector2d measured = Eigen::Vector2d::Zero();
-  std::vector<Eigen::Vector2d> e(f.size(), Eigen::Vector2d::Constant(NAN));
-  if (scored) scored->assign(f.size(), false);
-  double sum = 0, top = 0;
-  for (std::size_t i = 0; i < f.size(); ++i) {
-    if (f.flags[i] == VectorFlag::invalid || !truth_px[i].allFinite() || (only && !(*only)[i])) continue;
-    e[i] = Eigen::Vector2d(f.u_px[i], f.v_px[i]) - truth_px[i];
-    sum += e[i].squaredNorm();
-    top = std::max(top, e[i].norm());
-    measured += Eigen::Vector2d(f.u_px[i], f.v_px[i]);
-    ++s.vectors;
-    if (scored) (*scored)[i] = true;
-  }
-  if (mean_px) *mean_px = s.vectors ? Eigen::Vector2d(measured / s.vectors) : Eigen::Vector2d::Constant(NAN);
-  if (s.vectors) {
-    s.rms_px = std::sqrt(sum / s.vectors);
-    s.max_px = top;
-  }
-  if (errors) {
-    // One flat cell per vector over the image (plots.h, cells).
-    errors->vector_px = std::move(e);
-    use_vector_cells(f.grid, errors);
-  }
-  return s;
-}
 
 cv::Mat valid_mask(const std::vector<CellState>& states, const SheetGrid& grid) {
   cv::Mat m(grid.rows, grid.cols, CV_8U);
@@ -174,6 +143,34 @@ cv::Mat as_image(const std::vector<float>& l, const SheetGrid& grid) {
 }
 
 }  // namespace
+
+SheetPivScore score_vectors(const PivField& f, const std::vector<Eigen::Vector2d>& truth_px, GridValues* errors,
+                            const std::vector<bool>* only, std::vector<bool>* scored, Eigen::Vector2d* mean_px) {
+  SheetPivScore s;
+  Eigen::Vector2d measured = Eigen::Vector2d::Zero();
+  std::vector<Eigen::Vector2d> e(f.size(), Eigen::Vector2d::Constant(NAN));
+  if (scored) scored->assign(f.size(), false);
+  double sum = 0, top = 0;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (f.flags[i] == VectorFlag::invalid || !truth_px[i].allFinite() || (only && !(*only)[i])) continue;
+    e[i] = Eigen::Vector2d(f.u_px[i], f.v_px[i]) - truth_px[i];
+    sum += e[i].squaredNorm();
+    top = std::max(top, e[i].norm());
+    measured += Eigen::Vector2d(f.u_px[i], f.v_px[i]);
+    ++s.vectors;
+    if (scored) (*scored)[i] = true;
+  }
+  if (mean_px) *mean_px = s.vectors ? Eigen::Vector2d(measured / s.vectors) : Eigen::Vector2d::Constant(NAN);
+  if (s.vectors) {
+    s.rms_px = std::sqrt(sum / s.vectors);
+    s.max_px = top;
+  }
+  if (errors) {
+    errors->vector_px = std::move(e);
+    use_vector_cells(f.grid, errors);
+  }
+  return s;
+}
 
 void use_vector_cells(const InterrogationGrid& g, GridValues* errors) {
   errors->grid.cols = g.cols;
@@ -296,11 +293,11 @@ SheetPivSummary run_sheet_piv(const CorrectionScene& cs, const std::string& cent
     const std::vector<Eigen::Vector2d> truth = truth_on_vectors(lsq, grid, x.sheet_truth);
     GridValues errors;
     Eigen::Vector2d mean_px;
-    c.least_squares = score(lsq, truth, &errors, nullptr, all ? nullptr : &centre_scored, &mean_px);
+    c.least_squares = score_vectors(lsq, truth, &errors, nullptr, all ? nullptr : &centre_scored, &mean_px);
     c.mean_u_px = mean_px.x();
     c.mean_v_px = mean_px.y();
-    c.back_projection = score(bp, truth, nullptr);
-    if (all) s.all_on_centre_vectors = score(lsq, truth, nullptr, &centre_scored);
+    c.back_projection = score_vectors(bp, truth, nullptr);
+    if (all) s.all_on_centre_vectors = score_vectors(lsq, truth, nullptr, &centre_scored);
 
     // The pictures enlarged (nearest neighbour) to about 600 px wide: the grid is as coarse as a binned camera.
     const int zoom = std::max(1, kPictureWidthPx / grid.cols);

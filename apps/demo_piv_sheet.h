@@ -65,6 +65,15 @@ struct SheetPivSummary {
   double simulate_seconds = 0, operator_seconds = 0, reconstruct_seconds = 0, piv_seconds = 0, seconds = 0;
 };
 
+// Scores the vectors of f that are not invalid and have a truth (truth_px per
+// vector, NaN: none; with only, where it is set too); their errors (NaN
+// elsewhere) into *errors for the plot (one cell per vector), the vectors
+// scored into *scored and their mean measured displacement into *mean_px (each
+// optional).
+SheetPivScore score_vectors(const PivField& f, const std::vector<Eigen::Vector2d>& truth_px, GridValues* errors,
+                            const std::vector<bool>* only = nullptr, std::vector<bool>* scored = nullptr,
+                            Eigen::Vector2d* mean_px = nullptr);
+
 // errors->grid as one flat cell per vector of the PIV grid g (plots.h,
 // cells), then summarised; errors->vector_px must hold one entry per vector.
 void use_vector_cells(const InterrogationGrid& g, GridValues* errors);

@@ -42,10 +42,6 @@ nlohmann::json calibration_json(const DemoCalibrationSummary& c) {
           {"truth_difference_after_implied_rotation_rms_px", c.truth_difference_rotated_rms_px}};
 }
 
-nlohmann::json score_json(const DemoPivScore& s) {
-  return {{"rms_px", s.rms_px}, {"max_px", s.max_px}, {"vectors", s.vectors}};
-}
-
 nlohmann::json pose_json(const DemoPoseError& e) { return {{"position_mm", e.position_mm}, {"rotation_deg", e.rotation_deg}}; }
 
 }  // namespace
@@ -109,7 +105,7 @@ DemoReportFiles write_demo_report(const std::string& out_dir, const DemoSession&
         fmt::format("{:.4f} px", p9.corrected_own_model.rms_px), "");
   row("", "RMS error, uncorrected", fmt::format("{:.3f} px", p9.uncorrected.rms_px), "");
   row("", "masked share of the sheet's fluid region: one camera / five",
-      fmt::format("{:.1f} % / {:.1f} %", 100 * p9.one_camera_sheet_masked, 100 * p9.five_sheet_masked), "");
+      fmt::format("{:.1f} % / {:.1f} %", 100 * p9.one_camera_sheet_masked, 100 * p9.sheet.all.masked_fraction), "");
   row("", "on the sheet grid: RMS error, five cameras / the centre camera alone",
       fmt::format("{:.4f} px / {:.4f} px", p9.sheet.all.least_squares.rms_px, p9.sheet.centre.least_squares.rms_px), "");
   page += "</table>\n";
@@ -168,7 +164,7 @@ DemoReportFiles write_demo_report(const std::string& out_dir, const DemoSession&
        {{"no_glass", score_json(p9.no_glass)}, {"corrected", score_json(p9.corrected)},
         {"uncorrected", score_json(p9.uncorrected)},
         {"corrected_own_model", p9.own_model ? score_json(p9.corrected_own_model) : nlohmann::json()},
-        {"one_camera_sheet_masked", p9.one_camera_sheet_masked}, {"five_cameras_sheet_masked", p9.five_sheet_masked},
+        {"one_camera_sheet_masked", p9.one_camera_sheet_masked}, {"five_cameras_sheet_masked", p9.sheet.all.masked_fraction},
         {"sheet_grid_rms_px",
          {{"five_cameras", p9.sheet.all.least_squares.rms_px}, {"centre_alone", p9.sheet.centre.least_squares.rms_px}}},
         {"seconds", p9.seconds}}},
