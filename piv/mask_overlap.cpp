@@ -45,20 +45,17 @@ bool MaskOverlap::normalise(float* plane, const std::uint8_t* valid_a, int strid
   const float* o = overlap_.ptr<float>(0);
   const double at_zero = std::round(o[0]);
   if (at_zero < 1) return false;  // the correlator defines no plane for such windows
-  const double least = min_overlap * at_zero;
+  const double least = std::max(1.0, min_overlap * at_zero);
+  // Excluded lags are marked NaN (no plane value is), then get the lowest kept value.
   float lowest = std::numeric_limits<float>::max();
   for (int i = 0; i < n; ++i) {
     const double pairs = std::round(o[i]);
-    if (pairs >= least && pairs >= 1) {
-      plane[i] = static_cast<float>(plane[i] * (at_zero / pairs));
-      lowest = std::min(lowest, plane[i]);
-    }
+    plane[i] = pairs < least ? NAN : static_cast<float>(plane[i] * (at_zero / pairs));
+    if (!std::isnan(plane[i])) lowest = std::min(lowest, plane[i]);
   }
   if (lowest == std::numeric_limits<float>::max()) lowest = 0.0f;
-  for (int i = 0; i < n; ++i) {
-    const double pairs = std::round(o[i]);
-    if (!(pairs >= least && pairs >= 1)) plane[i] = lowest;
-  }
+  for (int i = 0; i < n; ++i)
+    if (std::isnan(plane[i])) plane[i] = lowest;
   return true;
 }
 
