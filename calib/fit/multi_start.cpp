@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <random>
@@ -249,9 +250,9 @@ MultiStartFit fit_intrinsics_multi_start(const Observations& observations, const
   // when nothing beats it.
   Stopwatch staged_clock;
   MultiStartFit out(fit_intrinsics(observations, options));
-  FitStart staged{"staged", true, "", out.fit.rms_px, staged_clock.seconds()};
-  out.starts.push_back(staged);
+  FitStart staged{"staged", true, "", out.fit.rms_px, staged_clock.seconds(), {}};
   if (!is_rich_lens_model(options.lens_model)) {
+    out.starts.push_back(staged);
     out.total_time_s = clock.seconds();
     return out;
   }
@@ -259,6 +260,12 @@ MultiStartFit fit_intrinsics_multi_start(const Observations& observations, const
   // Every other start is released on the staged fit's inliers, without an
   // outlier loop, so that all costs are sums over the same corners.
   const Observations inliers = inlier_observations(observations, out.fit);
+  const auto validity_of = [&](const IntrinsicFit& fit) {
+    return check_one_to_one(fit.camera, observed_undistorted_radius(inliers, fit.camera_from_board));
+  };
+  const auto refused = [&](const LensValidity& v) { return multi.require_one_to_one && !v.one_to_one; };
+  staged.validity = validity_of(out.fit);
+  out.starts.push_back(staged);
   IntrinsicFitOptions plain = options;
   plain.outlier_k = 0;
   // Without outliers the inliers are all corners and the winning start's fit
@@ -266,7 +273,8 @@ MultiStartFit fit_intrinsics_multi_start(const Observations& observations, const
   const bool all_inliers = out.fit.outlier_count == 0;
   if (!all_inliers) plain.compute_uncertainty = false;
   std::optional<IntrinsicFit> best_fit;
-  double best_rms = out.fit.rms_px;
+  // A staged fit that is not one to one is beaten by any start that is.
+  double best_rms = refused(staged.validity) ? std::numeric_limits<double>::infinity() : out.fit.rms_px;
   CameraModel best_camera = out.fit.camera;
   std::vector<RigidTransform> best_camera_from_board = out.fit.camera_from_board;
 
@@ -280,7 +288,7 @@ MultiStartFit fit_intrinsics_multi_start(const Observations& observations, const
   };
   const auto release = [&](const std::string& name, double scale, const std::function<Seed()>& make_seed) {
     Stopwatch start_clock;
-    FitStart start{name, false, "", 0, 0};
+    FitStart start{name, false, "", 0, 0, {}};
     try {
       Seed seed = make_seed();
       if (scale > 0) {
@@ -295,9 +303,11 @@ MultiStartFit fit_intrinsics_multi_start(const Observations& observations, const
         start.failure = "fitted " + std::to_string(fit.inlier_count) + " corners, not the staged fit's " +
                         std::to_string(out.fit.inlier_count);
       } else {
-        start.ok = true;
         start.rms_px = fit.rms_px;
-        if (fit.rms_px < best_rms) {
+        start.validity = validity_of(fit);
+        start.ok = !refused(start.validity);
+        if (!start.ok) start.failure = "not one to one over the image: " + start.validity.why;
+        if (start.ok && fit.rms_px < best_rms) {
           best_rms = fit.rms_px;
           best_camera = fit.camera;
           best_camera_from_board = fit.camera_from_board;
@@ -361,7 +371,13 @@ MultiStartFit fit_intrinsics_multi_start(const Observations& observations, const
     IntrinsicFitOptions o = options;
     o.initial_camera = best_camera;
     IntrinsicFit final_fit = fit_intrinsics(observations, o);
-    if (final_fit.inlier_count == out.fit.inlier_count && final_fit.rms_px >= out.fit.rms_px) {
+    const LensValidity final_validity = check_one_to_one(
+        final_fit.camera, observed_undistorted_radius(inlier_observations(observations, final_fit), final_fit.camera_from_board));
+    if (refused(final_validity)) {
+      out.starts[out.winner].failure = "its refit with the outlier loop is not one to one over the image: " + final_validity.why;
+      out.winner = 0;
+    } else if (!refused(staged.validity) && final_fit.inlier_count == out.fit.inlier_count &&
+               final_fit.rms_px >= out.fit.rms_px) {
       out.starts[out.winner].failure = "its refit with the outlier loop returned to a minimum no lower than the staged one";
       out.winner = 0;
     } else {

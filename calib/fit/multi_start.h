@@ -25,7 +25,11 @@
 //                       numerator-denominator trade), released.
 //
 // Every start ends in an unregularised fit_intrinsics on the inlier corners
-// of the staged fit, so the costs compare. Without outliers the winner's fit
+// of the staged fit, so the costs compare. A start whose minimum is not one to
+// one over the image (calib/fit/lens_validity.h: the radial map folds or meets
+// a pole of the rational factor before the image's farthest corner or an
+// observed corner) is refused, whatever its cost; a one-to-one start beats a
+// staged fit that is not. Without outliers the winner's fit
 // is the result; otherwise the winner is refitted with the caller's options
 // (outlier loop) on all corners, and kept if it ends below the staged fit.
 // See docs/intrinsic_fit.md, "Multi-start fits for rich models".
@@ -35,6 +39,7 @@
 
 #include "calib/camera_model.h"
 #include "calib/fit/intrinsic_fit.h"
+#include "calib/fit/lens_validity.h"
 #include "calib/observations.h"
 
 namespace glasspiv {
@@ -45,14 +50,21 @@ struct MultiStartOptions {
   double regularisation_scale = 1.0;
   int perturbed_starts = 3;        // valley steps, >= 0
   unsigned perturbation_seed = 1;  // their lengths are reproducible
+  // Refuse minima that are not one to one over the image (false: the lowest
+  // cost wins, as in mrcal and cv::calibrateCamera).
+  bool require_one_to_one = true;
 };
 
 struct FitStart {
   std::string name;   // "staged", "from opencv5", "regularised", "regularised from pinhole", "valley step +12.3"
-  bool ok = false;    // false: the start's fit failed (`failure` says why)
+  bool ok = false;    // false: the start's fit failed or was refused (`failure` says why)
   std::string failure;
-  double rms_px = 0;  // of its released fit over the staged fit's inlier corners
+  double rms_px = 0;  // of its released fit over the staged fit's inlier corners (refused ones too)
   double seconds = 0;
+  // Of its released fit: a start that is not one to one is refused (ok false)
+  // when MultiStartOptions::require_one_to_one; the staged fit stays the
+  // fallback, flagged here only.
+  LensValidity validity;
 };
 
 struct MultiStartFit {

@@ -4,11 +4,11 @@
 // - OpenCV's own left*.jpg and right*.jpg photos (data/calibration), glasspiv's
 //   detection and OpenCV's own (findChessboardCorners + cornerSubPix 11 x 11),
 //   opencv8, no outlier rejection: the multi-start reaches mrcal's optimum or a
-//   lower one (RMS at most mrcal's + 1e-4 px); on left*.jpg with OpenCV's
-//   corners the staged fit alone stops at 0.4029 px, above OpenCV's 0.3984,
-//   and the starts must get below it;
+//   lower one (RMS at most mrcal's + 1e-4 px) unless mrcal's is not one to one
+//   where the corners are, and its winner is one to one whenever a start is;
 // - synthetic sessions of a strong rational lens (sim/calibration_views.h,
-//   0.1 px noise): the projection error to the true lens is no worse than mrcal's.
+//   0.1 px noise): the projection error to the true lens is no worse than mrcal's;
+// - check_one_to_one on planted models: folds and poles refused, smooth lenses kept.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -25,6 +25,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "calib/fit/calibration_diagnostics.h"
+#include "calib/fit/lens_validity.h"
 #include "calib/fit/multi_start.h"
 #include "calib/lens_maps.h"
 #include "mrcal_peer.h"
@@ -112,7 +113,9 @@ void print_starts(const MultiStartFit& fit) {
       std::printf("  %-26s RMS %.6f px  %.3f s%s\n", s.name.c_str(), s.rms_px, s.seconds,
                   static_cast<int>(i) == fit.winner ? "  <- won" : "");
     else
-      std::printf("  %-26s failed: %s\n", s.name.c_str(), s.failure.c_str());
+      std::printf("  %-26s failed: %s%s\n", s.name.c_str(), s.failure.c_str(),
+                  s.rms_px > 0 ? (" (RMS " + std::to_string(s.rms_px) + " px)").c_str() : "");
+    if (s.ok && !s.validity.one_to_one) std::printf("  %-26s not one to one: %s\n", "", s.validity.why.c_str());
   }
 }
 
@@ -140,29 +143,94 @@ TEST_P(RealPhotos, Opencv8ReachesMrcalsOptimum) {
   const double opencv_rms =
       testing::opencv_calibrate(obs, LensModel::OpenCV8, &opencv, nullptr,
                                 cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 1000, 1e-15));
+  // The peers' minima checked on the disc of the observed corners (placed by
+  // the multi-start's poses: the peers' differ by ~0.003 in r_u).
+  const double radius = observed_undistorted_radius(obs, fit.fit.camera_from_board);
+  const LensValidity mrcal_validity = check_one_to_one(mrcal->camera, radius);
+  const LensValidity opencv_validity = check_one_to_one(opencv, radius);
   std::printf("opencv_%s, %s corners, opencv8: multi-start RMS %.6f px, mrcal %.6f px, cv::calibrateCamera %.6f px; "
               "%.2f s\n",
               set.c_str(), detector.c_str(), fit.fit.rms_px, mrcal->rms_px, opencv_rms, fit.total_time_s);
+  std::printf("  mrcal's minimum: %s\n  cv::calibrateCamera's: %s\n",
+              mrcal_validity.one_to_one ? "one to one" : mrcal_validity.why.c_str(),
+              opencv_validity.one_to_one ? "one to one" : opencv_validity.why.c_str());
   print_starts(fit);
   // mrcal's optimum or a lower one (mrcal's own route does not always find the
-  // lowest), never above the staged fit.
-  EXPECT_LE(fit.fit.rms_px, mrcal->rms_px + 1e-4);
-  EXPECT_LE(fit.fit.rms_px, fit.starts[0].rms_px);
-  // On left*.jpg with OpenCV's corners the staged fit stops at 0.4029 px (the
-  // issue's figure), 0.0045 px above cv::calibrateCamera: the starts must leave it.
-  if (set == "left" && detector == "opencv") {
-    EXPECT_LT(fit.fit.rms_px, fit.starts[0].rms_px - 2e-3);
+  // lowest) unless mrcal's is not one to one where the corners are: on
+  // right*.jpg with OpenCV's corners mrcal reaches RMS 0.4370 px (every start
+  // here 0.4575 px) with a pole of the radial factor at r_u 0.3737-0.3754 that
+  // bends the three worst corners (docs/intrinsic_fit.md, "One to one where
+  // observed"); the multi-start refuses such minima.
+  if (mrcal_validity.one_to_one) {
+    EXPECT_LE(fit.fit.rms_px, mrcal->rms_px + 1e-4);
+  }
+  // The winner is one to one, unless no start is (then the staged fit stays,
+  // flagged): without the check, steps along the valley won on three of these
+  // sets with poles among the corners (RMS 2e-5 to 3e-3 px lower).
+  bool any_one_to_one = false;
+  for (const FitStart& s : fit.starts) any_one_to_one |= s.ok && s.validity.one_to_one;
+  if (any_one_to_one) {
+    EXPECT_TRUE(fit.starts[fit.winner].validity.one_to_one);
+    EXPECT_TRUE(check_one_to_one(fit.fit.camera, radius).one_to_one);
+  } else {
+    EXPECT_EQ(fit.winner, 0);
+  }
+  if (fit.starts[0].validity.one_to_one) {
+    EXPECT_LE(fit.fit.rms_px, fit.starts[0].rms_px);
   }
   EXPECT_EQ(fit.fit.inlier_count, 13 * 54);
 }
 
-// right*.jpg with OpenCV's corners is left out: there mrcal's route reaches RMS
-// 0.4370 px, below every start here (0.4575 px, cv::calibrateCamera's too),
-// with a numerator and a denominator that both nearly vanish at r ~ 0.38
-// inside the image (docs/intrinsic_fit.md, "Multi-start fits").
 INSTANTIATE_TEST_SUITE_P(OpenCVSamples, RealPhotos,
                          ::testing::Values(std::make_tuple("left", "opencv"), std::make_tuple("left", "glasspiv"),
-                                           std::make_tuple("right", "glasspiv")));
+                                           std::make_tuple("right", "opencv"), std::make_tuple("right", "glasspiv")));
+
+// Planted models against check_one_to_one (calib/fit/lens_validity.h), on the
+// 640 x 480 image of OpenCV's samples (f 540: the image corner at r ~ 0.74).
+CameraModel planted(std::vector<double> distortion) {
+  return CameraModel(640, 480, 540, 540, 319.5, 239.5, std::move(distortion));
+}
+
+TEST(LensValidity, SmoothLensesPass) {
+  // The strong rational truth lens of the synthetic tests, out to its image corner.
+  const LensValidity truth = check_one_to_one(testing::truth_opencv8(), 1.0);
+  EXPECT_TRUE(truth.one_to_one) << truth.why;
+  EXPECT_GT(truth.min_denominator, 0.9);
+  // Barrel k1 = -0.5 folds at r_u = 1 / sqrt(3 * 0.5) = 0.8165 (d/dr r (1 - 0.5 r^2) = 0):
+  // one to one inside that radius, refused beyond it.
+  const CameraModel barrel = planted({-0.5, 0, 0, 0, 0});
+  EXPECT_TRUE(check_one_to_one(barrel, 0.8).one_to_one);
+  const LensValidity past = check_one_to_one(barrel, 0.83);
+  EXPECT_FALSE(past.one_to_one);
+  EXPECT_NEAR(past.fold_radius, 1 / std::sqrt(1.5), 1e-9);  // the bisection's tolerance
+  EXPECT_NE(past.why.find("folds back"), std::string::npos) << past.why;
+}
+
+// A pole-zero pair as mrcal's minimum of right*.jpg has it: D = (1 - s/a)(1 - s/b)
+// with roots r_u 0.3737 and 0.3754 (a ring 0.0017 wide, narrower than the 1 %
+// steps of CameraModel's fold march at that radius), N with roots close by.
+TEST(LensValidity, NarrowPoleZeroPairIsRefused) {
+  const double a = 0.3737 * 0.3737, b = 0.3754 * 0.3754, an = 0.3736 * 0.3736, bn = 0.3755 * 0.3755;
+  const CameraModel pole = planted({-(1 / an + 1 / bn), 1 / (an * bn), 0, 0, 0, -(1 / a + 1 / b), 1 / (a * b), 0});
+  const LensValidity v = check_one_to_one(pole, 0.69);
+  EXPECT_FALSE(v.one_to_one);
+  EXPECT_NE(v.why.find("denominator crosses 0 at r_u = 0.3737"), std::string::npos) << v.why;
+  EXPECT_LT(v.fold_radius, 0.3737 + 1e-6);  // where it first folds or meets the pole
+  EXPECT_GT(v.fold_radius, 0.36);
+  // Inside the ring it is a lens.
+  EXPECT_TRUE(check_one_to_one(pole, 0.3).one_to_one);
+}
+
+// The thin prism folds the map where the radial factor does not: x_d = x + s1 r^2
+// has dx_d/dx = 1 + 2 s1 x, zero at x = 0.25 for s1 = -2.
+TEST(LensValidity, PrismFoldIsRefused) {
+  std::vector<double> prism(12, 0.0);
+  prism[8] = -2;
+  EXPECT_TRUE(check_one_to_one(planted(prism), 0.24).one_to_one);
+  const LensValidity v = check_one_to_one(planted(prism), 0.3);
+  EXPECT_FALSE(v.one_to_one);
+  EXPECT_NE(v.why.find("distortion folds"), std::string::npos) << v.why;
+}
 
 // Synthetic sessions of a strong rational lens: the error of the fitted
 // projection to the true one (after the implied rotation, as mrcal compares
