@@ -306,7 +306,7 @@ MultiStartFit fit_intrinsics_multi_start(const Observations& observations, const
         start.rms_px = fit.rms_px;
         start.validity = validity_of(fit);
         start.ok = !refused(start.validity);
-        if (!start.ok) start.failure = "not one to one over the image: " + start.validity.why;
+        if (!start.ok) start.failure = "not one to one where the corners are: " + start.validity.why;
         if (start.ok && fit.rms_px < best_rms) {
           best_rms = fit.rms_px;
           best_camera = fit.camera;
@@ -374,7 +374,7 @@ MultiStartFit fit_intrinsics_multi_start(const Observations& observations, const
     const LensValidity final_validity = check_one_to_one(
         final_fit.camera, observed_undistorted_radius(inlier_observations(observations, final_fit), final_fit.camera_from_board));
     if (refused(final_validity)) {
-      out.starts[out.winner].failure = "its refit with the outlier loop is not one to one over the image: " + final_validity.why;
+      out.starts[out.winner].failure = "its refit with the outlier loop is not one to one where the corners are: " + final_validity.why;
       out.winner = 0;
     } else if (!refused(staged.validity) && final_fit.inlier_count == out.fit.inlier_count &&
                final_fit.rms_px >= out.fit.rms_px) {

@@ -26,10 +26,10 @@
 //
 // Every start ends in an unregularised fit_intrinsics on the inlier corners
 // of the staged fit, so the costs compare. A start whose minimum is not one to
-// one over the image (calib/fit/lens_validity.h: the radial map folds or meets
-// a pole of the rational factor before the image's farthest corner or an
-// observed corner) is refused, whatever its cost; a one-to-one start beats a
-// staged fit that is not. Without outliers the winner's fit
+// one where the corners are (calib/fit/lens_validity.h: the map folds or meets
+// a pole of the rational factor inside the farthest observed corner's radius)
+// is refused, whatever its cost; a one-to-one start beats a staged fit that is
+// not. Without outliers the winner's fit
 // is the result; otherwise the winner is refitted with the caller's options
 // (outlier loop) on all corners, and kept if it ends below the staged fit.
 // See docs/intrinsic_fit.md, "Multi-start fits for rich models".
@@ -50,8 +50,8 @@ struct MultiStartOptions {
   double regularisation_scale = 1.0;
   int perturbed_starts = 3;        // valley steps, >= 0
   unsigned perturbation_seed = 1;  // their lengths are reproducible
-  // Refuse minima that are not one to one over the image (false: the lowest
-  // cost wins, as in mrcal and cv::calibrateCamera).
+  // Refuse minima that are not one to one where the corners are (false: the
+  // lowest cost wins, as in mrcal and cv::calibrateCamera).
   bool require_one_to_one = true;
 };
 
