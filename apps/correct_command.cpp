@@ -38,7 +38,7 @@ struct CorrectOptions {
   std::vector<std::string> images, frames, camera_weights;
   double mm_per_px = 0, smoothness = LeastSquaresOptions{}.smoothness;
   double min_pixels = MaskOptions{}.min_pixels_per_cell, min_weight = MaskOptions{}.min_mean_weight;
-  double trace_min_weight = TraceOptions{}.min_weight;
+  double trace_min_weight = correction_trace_options().min_weight;
   int max_iterations = LeastSquaresOptions{}.max_iterations, samples = 1, threads = 0, binning = 1;
   bool no_reflections = false, no_cache = false, prepare_only = false;
 };

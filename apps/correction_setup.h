@@ -8,6 +8,7 @@
 
 #include "correct/camera_resampler.h"
 #include "correct/cell_mask.h"
+#include "correct/correction_defaults.h"
 #include "correct/correction_operator.h"
 #include "render/path_tracer.h"
 #include "render/scene.h"
@@ -15,7 +16,7 @@
 namespace glasspiv {
 
 struct CorrectionSettings {
-  TraceOptions trace;
+  TraceOptions trace = correction_trace_options();
   int samples = 1;           // per pixel axis, for the map
   OperatorOptions op;
   MaskOptions mask;

@@ -2,6 +2,7 @@
 // file formats, a calibration session on synthetic photos, the reactor rendered,
 // corrected, aligned on a photograph, and a simulated PIV experiment in it
 // evaluated against the truth.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <string_view>
@@ -154,6 +155,14 @@ DemoPivSummary run_piv_step(const fs::path& out, const fs::path& scenes_dir, int
                 "%.3f px after the implied rotation; aligned in step 8: centre %.3f mm from the truth's) %.4f px (%d)\n",
                 p.own_projection_difference_px, p.own_projection_difference_rotated_px, p.own_pose_error_mm,
                 p.corrected_own_model.rms_px, p.corrected_own_model.vectors);
+  std::printf("   run time against error (%.1f s), ms per frame and RMS error:", p.sweep_seconds);
+  for (std::size_t i = 0; i < p.sweep.size(); ++i) {
+    const ChainRow& r = p.sweep[i];
+    const bool on = std::find(p.sweep_front.begin(), p.sweep_front.end(), i) != p.sweep_front.end();
+    std::printf("%s %s %.2f ms %.4f px%s", i ? ";" : "", r.setting.label.c_str(), r.frame_ms, r.error.rms_px,
+                on ? " (Pareto)" : "");
+  }
+  std::printf("\n   %-40s the Pareto plot\n", p.pareto_png.c_str());
   std::printf("   %.1f%% of the camera's pixels masked by the correction; masked of the sheet grid's fluid region: one "
               "camera %.1f%%, five (binned %dx%d) %.1f%% (their centre camera alone %.1f%%)\n",
               100 * p.masked_pixel_fraction, 100 * p.one_camera_sheet_masked, p.five_binning, p.five_binning,

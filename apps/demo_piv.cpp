@@ -21,7 +21,11 @@
 #include "render/transport_map.h"
 #include "piv/piv_evaluate.h"
 #include "piv/vector_file.h"
+#include "sim/chain_sweep.h"
+#include "sim/pareto_plot.h"
 #include "sim/piv_experiment.h"
+#include "sim/piv_score.h"
+#include "sim/vortex_experiment.h"
 #include "util/atomic_file.h"
 #include "util/input_error.h"
 #include "util/stopwatch.h"
@@ -30,19 +34,29 @@ namespace glasspiv {
 namespace {
 namespace fs = std::filesystem;
 
-// The flow: a steady Lamb-Oseen vortex about the sheet normal through the
-// sheet's origin, core radius rc = 30 mm, its peak velocity 1 m/s at
-// r = 1.1209 rc (u_theta max = 0.6382 Gamma / (2 pi rc)): 1 mm between the
-// pulses, about 3 px of the glass-removed view at the demo's binning, well
-// within the one-quarter rule of a 32 px window.
-constexpr double kCoreRadiusMm = 30;
-constexpr double kPeakVelocityMPerS = 1.0;
-constexpr double kDtS = 1e-3;
-// The PIV design of sim_piv_experiment_test: 0.04 tracers per px, 2.5 px
-// images, 12 bits, an in-plane particle's peak about 2000 counts.
-constexpr double kDensityPpp = 0.04;
-constexpr double kParticlePx = 2.5;
-constexpr double kElectronsPerRadiance = 4000;
+// The map the one camera's frames are rendered through: richer than any
+// setting of the run-time-versus-error sweep (samples, cut-off).
+constexpr int kSimulationSamples = 2;
+constexpr double kSimulationMinWeight = 1e-3;
+
+// The demo's run time against error: glasspiv correct's defaults and one knob
+// changed per row (bench/chain_bench sweeps them all at more cost).
+std::vector<ChainSetting> demo_sweep_settings() {
+  std::vector<ChainSetting> v(6);
+  v[0].label = "default";
+  v[0].is_default = true;
+  v[1].label = "cut 1e-2";
+  v[1].min_weight = 1e-2;
+  v[2].label = "no reflections";
+  v[2].reflections = false;
+  v[3].label = "2x2 samples";
+  v[3].samples = 2;
+  v[4].label = "sheet grid 1x";
+  v[4].grid = ChainGrid::sheet_1x;
+  v[5].label = "least squares";
+  v[5].least_squares = true;
+  return v;
+}
 
 cv::Mat as_float(const cv::Mat& counts) {
   cv::Mat f;
@@ -61,13 +75,8 @@ cv::Mat to8(const cv::Mat& m, const cv::Mat& usable = cv::Mat()) {
 // RMS and max of |measured - true| over the vectors that are not invalid,
 // whose truth exists and whose window centre is usable (use: empty or per
 // pixel); errors (NaN where not scored) per vector for the plot.
-DemoPivScore score(const PivField& f, const CameraTruth& truth, const cv::Mat& use, GridValues* errors) {
-  std::vector<Eigen::Vector2d> truth_px(f.size(), Eigen::Vector2d::Constant(NAN));
-  for (std::size_t i = 0; i < f.size(); ++i) {
-    const int x = static_cast<int>(std::lround(f.x_px(i))), y = static_cast<int>(std::lround(f.y_px(i)));
-    if (use.empty() || use.at<std::uint8_t>(y, x) != 0) truth_px[i] = Eigen::Vector2d(truth.u_px[i], truth.v_px[i]);
-  }
-  return score_vectors(f, truth_px, errors);
+PivScore score(const PivField& f, const CameraTruth& truth, const cv::Mat& use, GridValues* errors) {
+  return score_vectors(f, camera_truth_on_vectors(f, truth, use), errors);
 }
 
 // A camera's frames corrected onto its glass-removed grid, from its map through
@@ -127,7 +136,7 @@ std::string write_page(const fs::path& out, const DemoPivSummary& s) {
       s.grid_cols, s.grid_rows);
   for (const std::string& w : s.warnings) page += "<p><b>Warning:</b> " + html_escape(w) + "</p>\n";
   page += "<table><tr><th>frames</th><th>RMS error px</th><th>max error px</th><th>vectors scored</th></tr>\n";
-  const auto row = [&](const char* what, const DemoPivScore& sc) {
+  const auto row = [&](const char* what, const PivScore& sc) {
     page += fmt::format("<tr><td>{}</td><td>{:.4f}</td><td>{:.3f}</td><td>{}</td></tr>\n", what, sc.rms_px, sc.max_px,
                         sc.vectors);
   };
@@ -160,7 +169,7 @@ std::string write_page(const fs::path& out, const DemoPivSummary& s) {
       s.five_binning, f.grid.cols, f.grid.rows, f.grid.mm_per_px, f.piv_cols, f.piv_rows);
   page += "<table><tr><th>cameras</th><th>masked of the fluid region</th><th>RMS error px</th><th>max error px</th>"
           "<th>vectors scored</th></tr>\n";
-  const auto sheet_row = [&](const std::string& what, double masked, const SheetPivScore& sc) {
+  const auto sheet_row = [&](const std::string& what, double masked, const PivScore& sc) {
     page += fmt::format("<tr><td>{}</td><td>{:.1f}&nbsp;%</td><td>{:.4f}</td><td>{:.3f}</td><td>{}</td></tr>\n", what,
                         100 * masked, sc.rms_px, sc.max_px, sc.vectors);
   };
@@ -188,6 +197,26 @@ std::string write_page(const fs::path& out, const DemoPivSummary& s) {
   figure(file_name(s.error_uncorrected_png),
          "The same for the uncorrected frames, scored where the corrected ones are.");
   page += "\n";
+  page += "<h2>Run time against error</h2>\n<p>The same frames corrected with glasspiv correct's default settings "
+          "and with one knob changed per row (all on the glass-removed camera grid but the sheet-grid row; errors in "
+          "px of that grid, over the vectors the row's mask keeps); the Pareto front of error against correction "
+          "time per frame, errors within 1&nbsp;% counting as equal. The maps and operators are built once per "
+          "series; <code>bench/chain_bench</code> sweeps every knob and the five-camera scene.</p>\n";
+  page += "<table><tr><th>setting</th><th>map s</th><th>build s</th><th>ms per frame</th><th>masked</th>"
+          "<th>RMS error px</th><th>vectors</th><th>Pareto</th></tr>\n";
+  for (std::size_t i = 0; i < s.sweep.size(); ++i) {
+    const ChainRow& r = s.sweep[i];
+    const bool on = std::find(s.sweep_front.begin(), s.sweep_front.end(), i) != s.sweep_front.end();
+    page += fmt::format(
+        "<tr><td>{}{}</td><td>{:.2f}</td><td>{:.2f}</td><td>{:.2f}</td><td>{:.1f}&nbsp;%</td><td>{:.4f}</td>"
+        "<td>{}</td><td>{}</td></tr>\n",
+        html_escape(r.setting.label), r.setting.is_default ? " (glasspiv correct)" : "", r.map_s, r.build_s,
+        r.frame_ms, 100 * r.masked, r.error.rms_px, r.error.vectors, on ? "yes" : "");
+  }
+  page += "</table>\n";
+  figure(file_name(s.pareto_png), "PIV error against correction time per frame (red: the Pareto front; ringed: "
+                                  "the default).");
+  page += "\n";
   page += fmt::format("<p>Vectors of the corrected frames: <a href=\"{0}\">{0}</a> (glasspiv piv's text format). "
                       "This step ran in {1:.1f} s (simulation {2:.1f} s, PIV {3:.1f} s).</p>\n",
                       file_name(s.vectors_txt), s.seconds, s.simulate_seconds, s.piv_seconds);
@@ -197,6 +226,21 @@ std::string write_page(const fs::path& out, const DemoPivSummary& s) {
   return path;
 }
 
+
+nlohmann::json sweep_json(const DemoPivSummary& s) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (std::size_t i = 0; i < s.sweep.size(); ++i) {
+    const ChainRow& r = s.sweep[i];
+    const ChainSetting& st = r.setting;
+    rows.push_back({{"setting", st.label}, {"default", st.is_default}, {"samples_per_axis", st.samples},
+                    {"min_weight", st.min_weight}, {"reflections", st.reflections}, {"grid", chain_grid_name(st.grid)},
+                    {"method", st.least_squares ? "least squares" : "accumulate"}, {"map_seconds", r.map_s},
+                    {"build_seconds", r.build_s}, {"frame_ms", r.frame_ms}, {"masked_fraction", r.masked},
+                    {"error_px", score_json(r.error)},
+                    {"pareto", std::find(s.sweep_front.begin(), s.sweep_front.end(), i) != s.sweep_front.end()}});
+  }
+  return {{"rows", rows}, {"error_tolerance", kParetoErrorTolerance}, {"plot", file_name(s.pareto_png)}};
+}
 
 std::string write_metrics(const fs::path& out, const DemoPivSummary& s) {
   nlohmann::json j = {
@@ -235,7 +279,10 @@ std::string write_metrics(const fs::path& out, const DemoPivSummary& s) {
         {"centre_alone", {{"masked_fraction", s.sheet.centre.masked_fraction},
                           {"error_px", score_json(s.sheet.centre.least_squares)},
                           {"error_back_projection_px", score_json(s.sheet.centre.back_projection)}}}}},
-      {"seconds", {{"simulate", s.simulate_seconds}, {"piv", s.piv_seconds}, {"five_cameras", s.five_seconds}}},
+      {"sweep", sweep_json(s)},
+      {"seconds",
+       {{"simulate", s.simulate_seconds}, {"piv", s.piv_seconds}, {"sweep", s.sweep_seconds},
+        {"five_cameras", s.five_seconds}}},
   };
   const std::string path = (out / "metrics.json").string();
   write_file_atomically(path, j.dump(2) + "\n");
@@ -244,7 +291,7 @@ std::string write_metrics(const fs::path& out, const DemoPivSummary& s) {
 
 }  // namespace
 
-nlohmann::json score_json(const DemoPivScore& s) {
+nlohmann::json score_json(const PivScore& s) {
   return {{"rms_px", s.rms_px}, {"max_px", s.max_px}, {"vectors", s.vectors}};
 }
 
@@ -263,11 +310,11 @@ DemoPivSummary run_piv_demo(const std::string& folder, const std::string& scenes
   s.width = cameras[0].model.width_px();
   s.height = cameras[0].model.height_px();
 
-  s.core_radius_mm = kCoreRadiusMm;
-  s.dt_s = kDtS;
-  s.circulation_m2_per_s = kPeakVelocityMPerS * 2 * M_PI * (1e-3 * kCoreRadiusMm) / 0.63817;
-  const SheetPlane& plane = cs.trace.sheet;
-  const LambOseenVortexFlow flow(plane.origin_mm, plane.normal(), s.circulation_m2_per_s, kCoreRadiusMm);
+  const VortexDesign design;
+  s.core_radius_mm = design.core_radius_mm;
+  s.dt_s = design.dt_s;
+  s.circulation_m2_per_s = design.circulation_m2_per_s();
+  const LambOseenVortexFlow flow = vortex_flow(cs.trace.sheet, design);
 
   PivOptions piv;  // 64 then 32 px windows, 50 % overlap: the published evaluation
   s.window_px = piv.window_px;
@@ -276,14 +323,13 @@ DemoPivSummary run_piv_demo(const std::string& folder, const std::string& scenes
   s.grid_cols = g.cols;
   s.grid_rows = g.rows;
 
-  PivExperimentSettings e;
-  e.dt_s = kDtS;
-  e.density_ppp = kDensityPpp;
-  e.particle_px = kParticlePx;
-  e.sensor.bit_depth = 12;
-  e.sensor.electrons_per_radiance = kElectronsPerRadiance;
-  e.seed = 8;
-  e.keep_maps = true;
+  PivExperimentSettings e = vortex_experiment_settings(design);
+  // The five cameras' frames through their default maps, whose operators they
+  // reuse (run_sheet_piv); the one camera's through a richer map than any
+  // correction setting below traces, so that none inverts its own forward model.
+  const PivExperimentSettings five_e = e;
+  e.samples_per_axis = kSimulationSamples;
+  e.trace.min_weight = kSimulationMinWeight;
   e.truth_grids.resize(1);
   for (int c = 0; c < g.cols; ++c) e.truth_grids[0].x_px.push_back(g.x_px(c));
   for (int r = 0; r < g.rows; ++r) e.truth_grids[0].y_px.push_back(g.y_px(r));
@@ -301,8 +347,13 @@ DemoPivSummary run_piv_demo(const std::string& folder, const std::string& scenes
   s.max_displacement_px = x.max_displacement_px;
   s.warnings = x.warnings;
 
-  // The correction onto the glass-removed camera grid, with the true model.
-  const CameraCorrection truth_correction = camera_correction(cs.trace, cam.map, cam.glass_removed_map);
+  // The correction onto the glass-removed camera grid, with the true model
+  // and glasspiv correct's default settings (the sweep's default row).
+  ChainSweep sweep(cs.trace, cameras, x, piv);
+  const ChainSetting defaults;
+  const CameraCorrection truth_correction =
+      camera_correction(cs.trace, sweep.map(0, defaults.samples, defaults.min_weight, defaults.reflections),
+                        sweep.glass_removed_map(defaults.samples));
   s.one_camera_sheet_masked = 1 - count_cells(truth_correction.states).valid_fraction_of_fluid();
   const cv::Mat usable = truth_correction.usable();
   s.masked_pixel_fraction = 1.0 - cv::countNonZero(usable) / double(usable.total());
@@ -332,7 +383,7 @@ DemoPivSummary run_piv_demo(const std::string& folder, const std::string& scenes
     std::fflush(stdout);
     const Stopwatch own_clock;
     const RigidTransform& pose = *recovered->camera_from_world;
-    const TransportMap map = build_transport_map(cs.trace, recovered->model, pose, e.trace, 1, 0);
+    const TransportMap map = build_transport_map(cs.trace, recovered->model, pose, defaults.trace_options(), 1, 0);
     const TransportMap direct = glass_removed_map(cs.trace, recovered->model, pose, 1, 0);
     const CameraCorrection own = camera_correction(cs.trace, map, direct);
     const cv::Mat own_usable = own.usable();
@@ -348,6 +399,17 @@ DemoPivSummary run_piv_demo(const std::string& folder, const std::string& scenes
                               implied_rotation(cameras[0].model, recovered->model, 16.0))
             .rms_px;
   }
+
+  // Run time against error: the sweep's rows, its Pareto front and plot.
+  std::printf("   run time against error: %zu correction settings...\n", demo_sweep_settings().size());
+  std::fflush(stdout);
+  const Stopwatch sweep_clock;
+  for (const ChainSetting& st : demo_sweep_settings()) s.sweep.push_back(sweep.run(st));
+  s.sweep_front = pareto_front(s.sweep, kParetoErrorTolerance);
+  s.pareto_png = (out / "pareto.png").string();
+  write_png(s.pareto_png, draw_pareto_plot(s.sweep, s.sweep_front, s.no_glass.rms_px,
+                                           "glasspiv demo: the reactor camera, PIV 64->32 px vs truth"));
+  s.sweep_seconds = sweep_clock.seconds();
 
   // Pictures and the corrected vectors.
   s.distorted_png = (out / "frame_a_distorted.png").string();
@@ -396,7 +458,8 @@ DemoPivSummary run_piv_demo(const std::string& folder, const std::string& scenes
     const Stopwatch five_clock;
     s.five_binning = 2 * binning;
     const CorrectionScene fcs = read_correction_scene((fs::path(scenes_dir) / "reactor_5cams.yaml").string());
-    s.sheet = run_sheet_piv(fcs, "cam_centre", flow, e, s.five_binning, five_cache_dir, piv, (out / "five").string());
+    s.sheet =
+        run_sheet_piv(fcs, "cam_centre", flow, five_e, s.five_binning, five_cache_dir, piv, (out / "five").string());
     s.five_seconds = five_clock.seconds();
   }
 

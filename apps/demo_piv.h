@@ -15,15 +15,12 @@
 
 #include "apps/demo_piv_sheet.h"
 #include "calib/camera.h"
+#include "sim/chain_sweep.h"
 
 namespace glasspiv {
 
-// RMS and max of |measured - true| (px) over the scored vectors: the same
-// score on the camera grid as on the sheet grid.
-using DemoPivScore = SheetPivScore;
-
 // {"rms_px", "max_px", "vectors"} (null where there is no figure).
-nlohmann::json score_json(const DemoPivScore& s);
+nlohmann::json score_json(const PivScore& s);
 
 struct DemoPivSummary {
   int width = 0, height = 0;  // the camera, binned
@@ -43,15 +40,21 @@ struct DemoPivSummary {
   double piv_seconds = 0;  // the three evaluations
   // Scored where the corrected frames are usable and the truth exists (no glass:
   // wherever the truth exists).
-  DemoPivScore no_glass, corrected, uncorrected;
-  DemoPivScore corrected_inner;  // windows with no masked pixel at all (what the mask's rim costs)
+  PivScore no_glass, corrected, uncorrected;
+  PivScore corrected_inner;  // windows with no masked pixel at all (what the mask's rim costs)
   // Corrected with the camera the demo recovered (own calibration and alignment) instead of the truth.
   bool own_model = false;
-  DemoPivScore corrected_own_model;
+  PivScore corrected_own_model;
   double own_pose_error_mm = 0;             // its camera centre from the truth's
   double own_projection_difference_px = 0;  // its intrinsics against the truth's, RMS over the image at 1 m
   double own_projection_difference_rotated_px = 0;  // the same after the rotation it implies
   double own_model_seconds = 0;
+  // Run time against error (sim/chain_sweep.h): glasspiv correct's defaults
+  // and one knob changed per row, the Pareto front (indices into sweep) and its plot.
+  std::vector<ChainRow> sweep;
+  std::vector<std::size_t> sweep_front;
+  std::string pareto_png;
+  double sweep_seconds = 0;
   double masked_pixel_fraction = 0;  // of the camera grid, by the correction's mask
   // The rectified sheet grid: masked fraction of its fluid region (correct/cell_mask.h).
   double one_camera_sheet_masked = 0;  // reactor.yaml's camera, on its grid

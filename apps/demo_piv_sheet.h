@@ -22,22 +22,16 @@
 #include "piv/piv_evaluate.h"
 #include "sim/flows.h"
 #include "sim/piv_experiment.h"
+#include "sim/piv_score.h"
 
 namespace glasspiv {
-
-// |measured - true| in sheet-grid px over the scored vectors (not invalid, and
-// the truth exists at the window centre); NaN when none.
-struct SheetPivScore {
-  double rms_px = NAN, max_px = NAN;
-  int vectors = 0;
-};
 
 // One set of cameras (all, or the centre one alone) on the sheet grid.
 struct SheetPivCase {
   std::vector<std::string> cameras;  // the scene's names
   double masked_fraction = 0;        // of the sheet's fluid region: cells not valid (correct/cell_mask.h)
-  SheetPivScore least_squares;       // PIV on the least-squares frames (the result)
-  SheetPivScore back_projection;     // PIV on the back-projected frames (the published method's)
+  PivScore least_squares;       // PIV on the least-squares frames (the result)
+  PivScore back_projection;     // PIV on the back-projected frames (the published method's)
   // Mean measured displacement over least_squares' scored vectors, grid px (+u: +s, +v: -t).
   double mean_u_px = NAN, mean_v_px = NAN;
   int lsq_iterations_a = 0, lsq_iterations_b = 0;
@@ -60,23 +54,10 @@ struct SheetPivSummary {
   SheetPivCase all, centre;               // all cameras; the centre camera alone
   // All cameras scored on the vectors the centre camera alone also scores: the
   // same region, so the accuracy comparison is like for like.
-  SheetPivScore all_on_centre_vectors;
+  PivScore all_on_centre_vectors;
   int operators_reused = 0;               // of the cameras' operators, loaded from the cache
   double simulate_seconds = 0, operator_seconds = 0, reconstruct_seconds = 0, piv_seconds = 0, seconds = 0;
 };
-
-// Scores the vectors of f that are not invalid and have a truth (truth_px per
-// vector, NaN: none; with only, where it is set too); their errors (NaN
-// elsewhere) into *errors for the plot (one cell per vector), the vectors
-// scored into *scored and their mean measured displacement into *mean_px (each
-// optional).
-SheetPivScore score_vectors(const PivField& f, const std::vector<Eigen::Vector2d>& truth_px, GridValues* errors,
-                            const std::vector<bool>* only = nullptr, std::vector<bool>* scored = nullptr,
-                            Eigen::Vector2d* mean_px = nullptr);
-
-// errors->grid as one flat cell per vector of the PIV grid g (plots.h,
-// cells), then summarised; errors->vector_px must hold one entry per vector.
-void use_vector_cells(const InterrogationGrid& g, GridValues* errors);
 
 // scene: a multi-camera scene (read_correction_scene; no camera need be
 // prepared: cs.cameras is not used); centre_camera: the name of the camera

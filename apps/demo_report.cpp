@@ -1,5 +1,7 @@
 #include "apps/demo_report.h"
 
+#include <algorithm>
+
 #include <filesystem>
 #include <stdexcept>
 
@@ -106,6 +108,15 @@ DemoReportFiles write_demo_report(const std::string& out_dir, const DemoSession&
   row("", "RMS error, uncorrected", fmt::format("{:.3f} px", p9.uncorrected.rms_px), "");
   row("", "masked share of the sheet's fluid region: one camera / five",
       fmt::format("{:.1f} % / {:.1f} %", 100 * p9.one_camera_sheet_masked, 100 * p9.sheet.all.masked_fraction), "");
+  {
+    std::size_t def = 0;
+    while (def < p9.sweep.size() && !p9.sweep[def].setting.is_default) ++def;
+    const bool on = std::find(p9.sweep_front.begin(), p9.sweep_front.end(), def) != p9.sweep_front.end();
+    row("", "correction defaults against one knob changed",
+        fmt::format("{} of {} settings on the Pareto front, the default {}", p9.sweep_front.size(), p9.sweep.size(),
+                    def == p9.sweep.size() ? "not run" : on ? "among them" : "not"),
+        "");
+  }
   row("", "on the sheet grid: RMS error, five cameras / the centre camera alone",
       fmt::format("{:.4f} px / {:.4f} px", p9.sheet.all.least_squares.rms_px, p9.sheet.centre.least_squares.rms_px), "");
   page += "</table>\n";
@@ -133,6 +144,10 @@ DemoReportFiles write_demo_report(const std::string& out_dir, const DemoSession&
   page += "</div>\n<div class=\"row\">";
   page += figure(out, p9.error_corrected_png, "|measured &minus; true|, corrected frames.");
   page += figure(out, p9.error_uncorrected_png, "|measured &minus; true|, uncorrected frames.");
+  page += "</div>\n<h3>Run time against error of the correction</h3>\n<div class=\"row\">";
+  page += figure(out, p9.pareto_png,
+                 "PIV error against correction time per frame, glasspiv correct's defaults and one knob changed per "
+                 "setting (red: the Pareto front; ringed: the default; the table on the PIV page).");
   page += "</div>\n<h3>One camera against five, on the sheet grid</h3>\n<div class=\"row\">";
   page += figure(out, p9.sheet.centre.frame_a_png, "Frame A from the centre camera alone (masked cells dark).");
   page += figure(out, p9.sheet.all.frame_a_png, "Frame A from all five cameras.");

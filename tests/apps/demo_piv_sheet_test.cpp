@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "sim/vortex_experiment.h"
 #include "tests/sanitized_build.h"
 #include "tests/temp_dir.h"
 
@@ -26,16 +27,7 @@ CorrectionScene five_cameras() {
 }
 
 // The demo's PIV design: 0.04 tracers per px, 2.5 px images, 12 bits.
-PivExperimentSettings experiment() {
-  PivExperimentSettings e;
-  e.dt_s = 1e-3;
-  e.density_ppp = 0.04;
-  e.particle_px = 2.5;
-  e.sensor.bit_depth = 12;
-  e.sensor.electrons_per_radiance = 4000;
-  e.seed = 8;
-  return e;
-}
+PivExperimentSettings experiment() { return vortex_experiment_settings(); }
 
 PivOptions piv_options() {
   PivOptions p;
@@ -47,9 +39,7 @@ TEST(DemoPivSheet, FiveCamerasMaskLessAndMeasureTheVortex) {
   const TempDir dir("demo_piv_sheet");
   const CorrectionScene cs = five_cameras();
   // The demo's flow: a Lamb-Oseen vortex about the sheet normal, rc = 30 mm, peak 1 m/s.
-  const SheetPlane& plane = cs.trace.sheet;
-  const double core_mm = 30, gamma = 1.0 * 2 * M_PI * 1e-3 * core_mm / 0.63817;
-  const LambOseenVortexFlow flow(plane.origin_mm, plane.normal(), gamma, core_mm);
+  const LambOseenVortexFlow flow = vortex_flow(cs.trace.sheet);
   const SheetPivSummary s =
       run_sheet_piv(cs, "cam_centre", flow, experiment(), kBinning, "", piv_options(), dir.file("out"));
 
