@@ -134,12 +134,20 @@ FitOutcome fit_with_diagnostics(const Observations& observations, const Intrinsi
   IntrinsicFit fit = [&] {
     if (!multi_start || !is_rich_lens_model(options.lens_model)) return fit_intrinsics(observations, options);
     MultiStartFit m = fit_intrinsics_multi_start(observations, options);
-    int tried = 0;
-    for (const FitStart& s : m.starts) tried += s.ok;
-    note = fmt::format("multi-start: '{}' won (RMS {:.6f} px; the staged fit {:.6f} px; {} of {} starts converged; "
-                       "{:.2f} s)",
-                       m.starts[m.winner].name, m.fit.rms_px, m.starts[0].rms_px, tried, m.starts.size(),
+    int kept = 0, refused = 0;
+    for (const FitStart& s : m.starts) {
+      kept += s.ok;
+      refused += !s.validity.one_to_one;
+    }
+    note = fmt::format("multi-start: '{}' won (RMS {:.6f} px; the staged fit {:.6f} px; {} of {} starts converged to "
+                       "a lens one to one over the corners, {} not one to one; {:.2f} s)",
+                       m.starts[m.winner].name, m.fit.rms_px, m.starts[0].rms_px, kept, m.starts.size(), refused,
                        m.total_time_s);
+    const LensValidity& v = m.starts[m.winner].validity;
+    if (!v.one_to_one)
+      note += fmt::format("\nwarning: no start found a lens one to one over the observed corners ({}); a simpler "
+                          "lens model (--lens-model opencv5) may describe this lens",
+                          v.why);
     return std::move(m.fit);
   }();
   FitOutcome out{std::move(fit), std::nullopt, "", note};
