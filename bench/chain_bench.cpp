@@ -175,7 +175,7 @@ int main(int argc, char** argv) {
   if (five) {
     add(1, "5-cam scene: centre alone", [](ChainSetting&) {});
     add(1, "5-cam scene: centre alone, sheet 1x", [](ChainSetting& s) { s.grid = ChainGrid::sheet_1x; });
-    add(1, "5 cams, sheet 1x", [](ChainSetting& s) {  // glasspiv correct --frame's defaults
+    add(1, "5 cams, sheet 1x: default", [](ChainSetting& s) {  // glasspiv correct --frame's defaults
       s.cameras = 5;
       s.grid = ChainGrid::sheet_1x;
       s.is_default = true;
@@ -241,7 +241,7 @@ int main(int argc, char** argv) {
       const ChainSetting& s = r.setting;
       const bool on_front = std::find(fronts[x].begin(), fronts[x].end(), i) != fronts[x].end();
       std::printf("| %d | %s%s%s | %d | %g | %s | %s | %s | %d%s | %.2f | %.2f | %.2f | %.1f %% | %d | %.4f | %s |\n",
-                  ++number, s.is_default ? "**" : "", s.label.c_str(), s.is_default ? " (default)**" : "", s.samples,
+                  ++number, s.is_default ? "**" : "", s.label.c_str(), s.is_default ? "**" : "", s.samples,
                   s.min_weight, s.reflections ? "on" : "off", chain_grid_name(s.grid),
                   s.least_squares ? "least squares" : "accumulate", s.cameras, x == 1 ? " (5-cam scene)" : "",
                   r.map_s, r.build_s, r.frame_ms, 100 * r.masked, r.error.vectors, r.error.rms_px,
