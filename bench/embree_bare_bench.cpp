@@ -28,7 +28,9 @@
 // - threads: std::threads over rows (glasspiv's parallel_rows, rows handed out
 //   dynamically), 2 by default.
 // glasspiv: build_transport_map with TraceOptions{reflections = false} and with
-// the default options (reflections on, min_weight 1e-2); segments =
+// the default options (reflections on, min_weight 1e-2), and with the
+// correction's (correct/correction_defaults.h: reflections on, min_weight 0.1,
+// what glasspiv correct traces); segments =
 // map.stats.branches_traced (its closed-form camera rays and its in-glass
 // segments need no BVH query but count as segments).
 #include <embree3/rtcore.h>
@@ -47,6 +49,7 @@
 #include <vector>
 
 #include "bench/bench_common.h"
+#include "correct/correction_defaults.h"
 #include "render/parallel_rows.h"
 #include "render/path_tracer.h"
 #include "render/scene_yaml.h"
@@ -370,6 +373,7 @@ int main(int argc, char** argv) {
   TraceOptions refraction_only;
   refraction_only.reflections = false;
   const TraceOptions defaults;
+  const TraceOptions correction = correction_trace_options();  // glasspiv correct's maps: reflections, cut at 0.1
 
   struct Run {
     double seconds = 0;
@@ -378,12 +382,21 @@ int main(int argc, char** argv) {
     double mseg_per_s() const { return segments / seconds / 1e6; }
     double mseg_per_cpu_s() const { return segments / cpu_s / 1e6; }
   };
-  std::vector<Run> bare_runs, refr_runs, def_runs;
+  std::vector<Run> bare_runs, refr_runs, def_runs, corr_runs;
   BareCounts bare_counts;
-  TransportStats refr_stats, def_stats;
-  double refr_map_mib = 0, def_map_mib = 0;
+  TransportStats refr_stats, def_stats, corr_stats;
+  double refr_map_mib = 0, def_map_mib = 0, corr_map_mib = 0;
   const double rss_before_maps = peak_rss_mib();
 
+  // One glasspiv map build, timed (wall and process CPU), its stats and size kept.
+  const auto trace_map = [&](const TraceOptions& o, std::vector<Run>* runs, TransportStats* stats, double* mib) {
+    const Stopwatch clock;
+    const double cpu0 = process_cpu_s();
+    const TransportMap map = build_transport_map(ts, cam, pose, o, 1, threads);
+    runs->push_back({clock.seconds(), map.stats.branches_traced, process_cpu_s() - cpu0});
+    *stats = map.stats;
+    *mib = map.memory_bytes() / 1048576.0;
+  };
   std::printf("\n| rep | tracer | s | segments | M segments/s | s per MP | glasspiv/bare, segments/s | CPU s | "
               "glasspiv/bare, segments per CPU s |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
@@ -394,33 +407,23 @@ int main(int argc, char** argv) {
       bare_counts = run_bare(bare, rays, threads);
       bare_runs.push_back({clock.seconds(), bare_counts.segments, process_cpu_s() - cpu0});
     }
-    {
-      const Stopwatch clock;
-      const double cpu0 = process_cpu_s();
-      const TransportMap map = build_transport_map(ts, cam, pose, refraction_only, 1, threads);
-      refr_runs.push_back({clock.seconds(), map.stats.branches_traced, process_cpu_s() - cpu0});
-      refr_stats = map.stats;
-      refr_map_mib = map.memory_bytes() / 1048576.0;
-    }
-    {
-      const Stopwatch clock;
-      const double cpu0 = process_cpu_s();
-      const TransportMap map = build_transport_map(ts, cam, pose, defaults, 1, threads);
-      def_runs.push_back({clock.seconds(), map.stats.branches_traced, process_cpu_s() - cpu0});
-      def_stats = map.stats;
-      def_map_mib = map.memory_bytes() / 1048576.0;
-    }
+    trace_map(refraction_only, &refr_runs, &refr_stats, &refr_map_mib);
+    trace_map(defaults, &def_runs, &def_stats, &def_map_mib);
+    trace_map(correction, &corr_runs, &corr_stats, &corr_map_mib);
     const Run& b = bare_runs.back();
     const Run& r = refr_runs.back();
     const Run& d = def_runs.back();
+    const Run& c = corr_runs.back();
     std::printf("| %d | bare Embree, refraction only | %.3f | %ld | %.2f | %.3f | | %.3f | |\n", rep, b.seconds,
                 b.segments, b.mseg_per_s(), b.seconds / mp, b.cpu_s);
-    std::printf("| %d | glasspiv, refraction only | %.3f | %ld | %.2f | %.3f | %.3f | %.3f | %.3f |\n", rep, r.seconds,
-                r.segments, r.mseg_per_s(), r.seconds / mp, r.mseg_per_s() / b.mseg_per_s(), r.cpu_s,
-                r.mseg_per_cpu_s() / b.mseg_per_cpu_s());
-    std::printf("| %d | glasspiv, default (reflections, min_weight 1e-2) | %.3f | %ld | %.2f | %.3f | %.3f | %.3f | %.3f |\n",
-                rep, d.seconds, d.segments, d.mseg_per_s(), d.seconds / mp, d.mseg_per_s() / b.mseg_per_s(), d.cpu_s,
-                d.mseg_per_cpu_s() / b.mseg_per_cpu_s());
+    const auto row = [&](const char* name, const Run& g) {
+      std::printf("| %d | glasspiv, %s | %.3f | %ld | %.2f | %.3f | %.3f | %.3f | %.3f |\n", rep, name, g.seconds,
+                  g.segments, g.mseg_per_s(), g.seconds / mp, g.mseg_per_s() / b.mseg_per_s(), g.cpu_s,
+                  g.mseg_per_cpu_s() / b.mseg_per_cpu_s());
+    };
+    row("refraction only", r);
+    row("default (reflections, min_weight 1e-2)", d);
+    row("correction default (reflections, min_weight 0.1)", c);
     std::fflush(stdout);
   }
 
@@ -444,21 +447,24 @@ int main(int argc, char** argv) {
               med(refr_runs, secs) / mp, ratio_med(refr_runs));
   std::printf("| glasspiv, default | %.3f | %.2f | %.3f | %.3f |\n", med(def_runs, secs), med(def_runs, rate),
               med(def_runs, secs) / mp, ratio_med(def_runs));
+  std::printf("| glasspiv, correction default | %.3f | %.2f | %.3f | %.3f |\n", med(corr_runs, secs),
+              med(corr_runs, rate), med(corr_runs, secs) / mp, ratio_med(corr_runs));
   auto cpu_ratio_med = [&](const std::vector<Run>& runs) {
     std::vector<double> v;
     for (std::size_t i = 0; i < runs.size(); ++i) v.push_back(runs[i].mseg_per_cpu_s() / bare_runs[i].mseg_per_cpu_s());
     return median(v);
   };
-  std::printf("glasspiv/bare, segments per CPU second (same rep, median): refraction only %.3f, default %.3f\n",
-              cpu_ratio_med(refr_runs), cpu_ratio_med(def_runs));
-  {
-    std::vector<double> scaled;
-    for (std::size_t i = 0; i < def_runs.size(); ++i)
-      scaled.push_back(def_runs[i].seconds / mp * (bare_runs[i].mseg_per_s() / 17.0));
-    std::printf("\ndefault settings s per MP scaled to a bare tracer at 17 M segments/s "
-                "(glasspiv default s/MP x bare M seg/s / 17, per rep, median): %.3f\n",
-                median(scaled));
-  }
+  std::printf("glasspiv/bare, segments per CPU second (same rep, median): refraction only %.3f, default %.3f, "
+              "correction default %.3f\n",
+              cpu_ratio_med(refr_runs), cpu_ratio_med(def_runs), cpu_ratio_med(corr_runs));
+  const auto scaled = [&](const std::vector<Run>& runs) {
+    std::vector<double> v;
+    for (std::size_t i = 0; i < runs.size(); ++i) v.push_back(runs[i].seconds / mp * (bare_runs[i].mseg_per_s() / 17.0));
+    return median(v);
+  };
+  std::printf("\ns per MP scaled to a bare tracer at 17 M segments/s (glasspiv s/MP x bare M seg/s / 17, per rep, "
+              "median): default %.3f, correction default %.3f\n",
+              scaled(def_runs), scaled(corr_runs));
   {
     // glasspiv unprojects every pixel inside its timed build; the bare time does not.
     const double with_rays = med(bare_runs, secs) + ray_s;
@@ -483,6 +489,11 @@ int main(int argc, char** argv) {
               "%ld crossings\n",
               def_stats.camera_rays, def_stats.branches_traced, double(def_stats.branches_traced) / def_stats.camera_rays,
               def_stats.branches_cut_by_weight, def_stats.branches_cut_by_depth, def_stats.crossings);
+  std::printf("  glasspiv correction default: %ld camera rays, %ld segments (%.3f per ray), %ld cut by weight, %ld cut "
+              "by depth, %ld crossings; map %.1f MiB\n",
+              corr_stats.camera_rays, corr_stats.branches_traced,
+              double(corr_stats.branches_traced) / corr_stats.camera_rays, corr_stats.branches_cut_by_weight,
+              corr_stats.branches_cut_by_depth, corr_stats.crossings, corr_map_mib);
   std::printf("  bare vs glasspiv refraction-only segments: %+.4f %%\n",
               100.0 * (double(bare_counts.segments) - refr_stats.branches_traced) / refr_stats.branches_traced);
   std::printf("maps: refraction only %.1f MiB, default %.1f MiB (TransportMap::memory_bytes); peak RSS %.1f MiB "
