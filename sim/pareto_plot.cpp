@@ -2,20 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-
+#include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 namespace glasspiv {
-namespace {
-
-std::string fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
-
-}  // namespace
 
 cv::Mat draw_pareto_plot(const std::vector<ChainRow>& rows, const std::vector<std::size_t>& front, double no_glass_px,
                          const std::string& title) {
@@ -46,7 +36,7 @@ cv::Mat draw_pareto_plot(const std::vector<ChainRow>& rows, const std::vector<st
       if (std::log10(ms) > lx1 + 1e-9) continue;
       const int x = static_cast<int>(X(ms));
       cv::line(img, {x, top}, {x, H - bottom}, m == 1 ? grey : light, 1);
-      cv::putText(img, fmt("%g", ms), {x - 10, H - bottom + 18}, font, 0.45, black, 1, cv::LINE_AA);
+      cv::putText(img, fmt::format("{:g}", ms), {x - 10, H - bottom + 18}, font, 0.45, black, 1, cv::LINE_AA);
     }
   for (double d = ly0; d <= ly1; d += 1)
     for (double m : {1.0, 2.0, 5.0}) {
@@ -54,7 +44,7 @@ cv::Mat draw_pareto_plot(const std::vector<ChainRow>& rows, const std::vector<st
       if (std::log10(e) > ly1 + 1e-9) continue;
       const int y = static_cast<int>(Y(e));
       cv::line(img, {left, y}, {plot_right, y}, m == 1 ? grey : light, 1);
-      cv::putText(img, fmt("%g", e), {left - 45, y + 5}, font, 0.45, black, 1, cv::LINE_AA);
+      cv::putText(img, fmt::format("{:g}", e), {left - 45, y + 5}, font, 0.45, black, 1, cv::LINE_AA);
     }
   cv::rectangle(img, {left, top}, {plot_right, H - bottom}, black, 1);
   cv::putText(img, "correction time per frame (ms, log scale)", {left + 250, H - 25}, font, 0.55, black, 1, cv::LINE_AA);
@@ -63,7 +53,7 @@ cv::Mat draw_pareto_plot(const std::vector<ChainRow>& rows, const std::vector<st
   if (no_glass_px > 0) {
     const int y = static_cast<int>(Y(no_glass_px));
     for (int x = left; x < plot_right; x += 12) cv::line(img, {x, y}, {std::min(x + 6, plot_right), y}, blue, 1);
-    cv::putText(img, fmt("no glass %.3f px", no_glass_px), {plot_right - 150, y - 6}, font, 0.45, blue, 1, cv::LINE_AA);
+    cv::putText(img, fmt::format("no glass {:.3f} px", no_glass_px), {plot_right - 150, y - 6}, font, 0.45, blue, 1, cv::LINE_AA);
   }
   for (std::size_t k = 1; k < front.size(); ++k) {
     const ChainRow &a = rows[front[k - 1]], &b = rows[front[k]];
