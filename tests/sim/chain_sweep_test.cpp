@@ -144,8 +144,14 @@ TEST_F(SmallSweep, EverySettingScoresTheVortex) {
   EXPECT_EQ(plot.type(), CV_8UC3);
 }
 
-TEST_F(SmallSweep, RefusesSettingsItCannotRun) {
-  ChainSweep sweep(*trace_, *cameras_, *experiment_, *piv_);
+TEST(ChainSweep, RefusesSettingsItCannotRun) {
+  // Refused before any work: an experiment with one camera's (empty) result will do.
+  const TraceScene trace;
+  const std::vector<ExperimentCamera> one = {{"cam", CameraModel(64, 48, 50, 50, 31.5, 23.5), RigidTransform{}}};
+  PivExperiment experiment;
+  experiment.cameras.resize(1);
+  const PivOptions piv;
+  ChainSweep sweep(trace, one, experiment, piv);
   ChainSetting two;
   two.cameras = 2;
   EXPECT_THROW(sweep.run(two), std::invalid_argument);
@@ -153,7 +159,7 @@ TEST_F(SmallSweep, RefusesSettingsItCannotRun) {
   none.samples = 0;
   EXPECT_THROW(sweep.run(none), std::invalid_argument);
   const std::vector<ExperimentCamera> no_cameras;
-  EXPECT_THROW(ChainSweep(*trace_, no_cameras, *experiment_, *piv_), std::invalid_argument);
+  EXPECT_THROW(ChainSweep(trace, no_cameras, experiment, piv), std::invalid_argument);
 }
 
 }  // namespace
