@@ -143,7 +143,7 @@ DemoPivSummary run_piv_step(const fs::path& out, const fs::path& scenes_dir, int
               p.width, p.height, p.tracers, p.density_ppp, p.particle_px, p.bit_depth, p.max_displacement_px,
               p.simulate_seconds);
   for (const std::string& w : p.warnings) std::printf("   warning: %s\n", w.c_str());
-  std::printf("   PIV %s px windows, %.0f%% overlap (%dx%d vectors, 3 pairs in %.1f s); RMS error against the truth:\n",
+  std::printf("   PIV %s px windows, %.0f%% overlap (%dx%d vectors, reference and uncorrected pairs in %.1f s); RMS error against the truth:\n",
               fmt::format("{}", fmt::join(p.window_px, "-")).c_str(), 100 * p.overlap, p.grid_cols, p.grid_rows,
               p.piv_seconds);
   std::printf("     no glass %.4f px (%d vectors), corrected %.4f px (%d), uncorrected %.4f px (%d, on the same "
@@ -158,7 +158,7 @@ DemoPivSummary run_piv_step(const fs::path& out, const fs::path& scenes_dir, int
   std::printf("   run time against error (%.1f s), ms per frame and RMS error:", p.sweep_seconds);
   for (std::size_t i = 0; i < p.sweep.size(); ++i) {
     const ChainRow& r = p.sweep[i];
-    const bool on = std::find(p.sweep_front.begin(), p.sweep_front.end(), i) != p.sweep_front.end();
+    const bool on = on_front(p.sweep_front, i);
     std::printf("%s %s %.2f ms %.4f px%s", i ? ";" : "", r.setting.label.c_str(), r.frame_ms, r.error.rms_px,
                 on ? " (Pareto)" : "");
   }

@@ -37,7 +37,7 @@ struct DemoPivSummary {
   std::vector<int> window_px;
   double overlap = 0;
   int grid_cols = 0, grid_rows = 0;
-  double piv_seconds = 0;  // the three evaluations
+  double piv_seconds = 0;  // the reference and uncorrected evaluations (the corrected one: the sweep's first row)
   // Scored where the corrected frames are usable and the truth exists (no glass:
   // wherever the truth exists).
   PivScore no_glass, corrected, uncorrected;

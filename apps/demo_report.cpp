@@ -111,7 +111,7 @@ DemoReportFiles write_demo_report(const std::string& out_dir, const DemoSession&
   {
     std::size_t def = 0;
     while (def < p9.sweep.size() && !p9.sweep[def].setting.is_default) ++def;
-    const bool on = std::find(p9.sweep_front.begin(), p9.sweep_front.end(), def) != p9.sweep_front.end();
+    const bool on = on_front(p9.sweep_front, def);
     row("", "correction defaults against one knob changed",
         fmt::format("{} of {} settings on the Pareto front, the default {}", p9.sweep_front.size(), p9.sweep.size(),
                     def == p9.sweep.size() ? "not run" : on ? "among them" : "not"),

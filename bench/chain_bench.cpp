@@ -239,13 +239,13 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < rows[x].size(); ++i) {
       const ChainRow& r = rows[x][i];
       const ChainSetting& s = r.setting;
-      const bool on_front = std::find(fronts[x].begin(), fronts[x].end(), i) != fronts[x].end();
+      const bool front = on_front(fronts[x], i);
       std::printf("| %d | %s%s%s | %d | %g | %s | %s | %s | %d%s | %.2f | %.2f | %.2f | %.1f %% | %d | %.4f | %s |\n",
                   ++number, s.is_default ? "**" : "", s.label.c_str(), s.is_default ? "**" : "", s.samples,
                   s.min_weight, s.reflections ? "on" : "off", chain_grid_name(s.grid),
                   s.least_squares ? "least squares" : "accumulate", s.cameras, x == 1 ? " (5-cam scene)" : "",
                   r.map_s, r.build_s, r.frame_ms, 100 * r.masked, r.error.vectors, r.error.rms_px,
-                  on_front ? "yes" : "");
+                  front ? "yes" : "");
     }
   }
   std::printf("\nReferences (%s, %dx%d, every vector with a truth): no glass %.4f px (%d vectors), uncorrected "
@@ -255,7 +255,7 @@ int main(int argc, char** argv) {
   for (std::size_t x = 0; x < rows.size(); ++x) {
     const auto def = std::find_if(rows[x].begin(), rows[x].end(), [](const ChainRow& r) { return r.setting.is_default; });
     if (def == rows[x].end()) continue;
-    const bool on = std::find(fronts[x].begin(), fronts[x].end(), std::size_t(def - rows[x].begin())) != fronts[x].end();
+    const bool on = on_front(fronts[x], std::size_t(def - rows[x].begin()));
     std::printf("%s: the default settings are %son the Pareto front of error against correction time per frame "
                 "(errors within %.0f %% count as equal).\n",
                 experiments[x].scene_name.c_str(), on ? "" : "NOT ", 100 * kParetoErrorTolerance);

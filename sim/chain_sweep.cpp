@@ -49,18 +49,15 @@ ChainSweep::ChainSweep(const TraceScene& scene, const std::vector<ExperimentCame
   piv_.check();
 }
 
-const ChainSweep::TimedMap& ChainSweep::timed_map(int camera, int samples, double min_weight, bool reflections) {
-  const auto key = std::make_tuple(camera, samples, min_weight, reflections);
+const ChainSweep::TimedMap& ChainSweep::timed_map(int camera, const ChainSetting& st) {
+  const auto key = std::make_tuple(camera, st.samples, st.min_weight, st.reflections);
   auto it = maps_.find(key);
   if (it == maps_.end()) {
-    ChainSetting st;
-    st.min_weight = min_weight;
-    st.reflections = reflections;
-    const TraceOptions o = st.trace_options();
     const ExperimentCamera& c = cameras_[static_cast<std::size_t>(camera)];
     TimedMap m;
-    m.seconds = seconds_of(
-        [&] { m.map = build_transport_map(scene_, c.model, c.camera_from_world, o, samples, options_.threads); });
+    m.seconds = seconds_of([&] {
+      m.map = build_transport_map(scene_, c.model, c.camera_from_world, st.trace_options(), st.samples, options_.threads);
+    });
     it = maps_.emplace(key, std::move(m)).first;
   }
   return it->second;
@@ -79,7 +76,11 @@ const ChainSweep::TimedMap& ChainSweep::timed_glass_removed_map(int samples) {
 }
 
 const TransportMap& ChainSweep::map(int camera, int samples, double min_weight, bool reflections) {
-  return timed_map(camera, samples, min_weight, reflections).map;
+  ChainSetting st;
+  st.samples = samples;
+  st.min_weight = min_weight;
+  st.reflections = reflections;
+  return timed_map(camera, st).map;
 }
 
 const TransportMap& ChainSweep::glass_removed_map(int samples) { return timed_glass_removed_map(samples).map; }
@@ -95,7 +96,7 @@ ChainRow ChainSweep::run(const ChainSetting& st, ChainImages* images) {
   // One-off: the maps (through the glass per camera, and the reference camera's glass-removed view).
   std::vector<const TransportMap*> maps;
   for (int k = 0; k < st.cameras; ++k) {
-    const TimedMap& m = timed_map(k, st.samples, st.min_weight, st.reflections);
+    const TimedMap& m = timed_map(k, st);
     maps.push_back(&m.map);
     row.map_s += m.seconds;
   }
@@ -206,6 +207,7 @@ ChainRow ChainSweep::run(const ChainSetting& st, ChainImages* images) {
     images->corrected_a = out_a;
     images->corrected_b = out_b;
     images->usable = usable;
+    images->states = states;
     images->field = std::move(f);
   }
   return row;
@@ -227,6 +229,10 @@ std::vector<std::size_t> pareto_front(const std::vector<ChainRow>& rows, double 
   }
   std::sort(front.begin(), front.end(), [&](std::size_t a, std::size_t b) { return rows[a].frame_ms < rows[b].frame_ms; });
   return front;
+}
+
+bool on_front(const std::vector<std::size_t>& front, std::size_t row) {
+  return std::find(front.begin(), front.end(), row) != front.end();
 }
 
 }  // namespace glasspiv

@@ -23,6 +23,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "correct/cell_mask.h"
 #include "correct/correction_defaults.h"
 #include "piv/piv_evaluate.h"
 #include "render/path_tracer.h"
@@ -61,6 +62,7 @@ struct ChainRow {
 struct ChainImages {
   cv::Mat corrected_a, corrected_b;  // CV_32F, camera or sheet grid
   cv::Mat usable;                    // CV_8U, 255 where the mask keeps the pixel or cell
+  std::vector<CellState> states;     // the sheet grid's cells (correct/cell_mask.h)
   PivField field;
 };
 
@@ -91,7 +93,7 @@ class ChainSweep {
     TransportMap map;
     double seconds = 0;
   };
-  const TimedMap& timed_map(int camera, int samples, double min_weight, bool reflections);
+  const TimedMap& timed_map(int camera, const ChainSetting& setting);
   const TimedMap& timed_glass_removed_map(int samples);
 
   const TraceScene& scene_;
@@ -109,6 +111,9 @@ class ChainSweep {
 // error_tolerance (relative) counting as equal. Rows without an error are
 // never on it.
 std::vector<std::size_t> pareto_front(const std::vector<ChainRow>& rows, double error_tolerance);
+
+// Whether row index `row` is among `front`'s.
+bool on_front(const std::vector<std::size_t>& front, std::size_t row);
 
 // The tolerance the bench and the demo use: a difference of under 1 % of the
 // error is not worth paying time for (for scale, the RMS over the demo's ~250

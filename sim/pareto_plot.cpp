@@ -65,20 +65,20 @@ cv::Mat draw_pareto_plot(const std::vector<ChainRow>& rows, const std::vector<st
               black, 1, cv::LINE_AA);
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const ChainRow& r = rows[i];
-    const bool on_front = std::find(front.begin(), front.end(), i) != front.end();
+    const bool on = on_front(front, i);
     const std::string id = std::to_string(i + 1);
     legend_y += 22;
     const bool named = r.setting.label.find("default") != std::string::npos;
     cv::putText(img, id + "  " + r.setting.label + (r.setting.is_default && !named ? " (default)" : ""),
-                {plot_right + 15, legend_y}, font, 0.42, on_front ? red : black, 1, cv::LINE_AA);
+                {plot_right + 15, legend_y}, font, 0.42, on ? red : black, 1, cv::LINE_AA);
     if (!std::isfinite(r.error.rms_px)) continue;
     const cv::Point p(int(X(r.frame_ms)), int(Y(r.error.rms_px)));
-    cv::circle(img, p, 4, on_front ? red : black, cv::FILLED, cv::LINE_AA);
+    cv::circle(img, p, 4, on ? red : black, cv::FILLED, cv::LINE_AA);
     if (r.setting.is_default) cv::circle(img, p, 9, red, 2, cv::LINE_AA);
     // Numbers fanned around the point so that neighbours stay readable.
     const int k = static_cast<int>(i % 4);
     const cv::Point off = k == 0 ? cv::Point(6, -6) : k == 1 ? cv::Point(6, 16) : k == 2 ? cv::Point(-20, -6) : cv::Point(-20, 16);
-    cv::putText(img, id, p + off, font, 0.42, on_front ? red : black, 1, cv::LINE_AA);
+    cv::putText(img, id, p + off, font, 0.42, on ? red : black, 1, cv::LINE_AA);
   }
   return img;
 }
