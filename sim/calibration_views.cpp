@@ -31,7 +31,13 @@ std::vector<RigidTransform> plan_views(const CameraModel& camera, const Syntheti
     const double a = tilt(rng) * kDeg, b = tilt(rng) * kDeg, c = roll(rng) * kDeg;
     // Head-on, the board's width w at depth z covers fx w / z pixels.
     const double depth_mm = camera.fx_px() * board_size_mm.x() / (fill(rng) * camera.width_px());
-    const Eigen::Vector2d target(spread(rng) * (camera.width_px() - 1), spread(rng) * (camera.height_px() - 1));
+    // One draw per statement: a call's arguments are evaluated in an
+    // unspecified order (GCC right to left, clang left to right), and the
+    // views must follow from the seed alone. Row first: GCC's order, so the
+    // views are those of earlier releases.
+    const double row_fraction = spread(rng);
+    const double col_fraction = spread(rng);
+    const Eigen::Vector2d target(col_fraction * (camera.width_px() - 1), row_fraction * (camera.height_px() - 1));
     const UnprojectResult ray = camera.unproject(target);
     if (!ray.ok()) continue;
     poses.push_back(board_pose_facing(ray.ray_camera / ray.ray_camera.z() * depth_mm, board_size_mm, a, b, c));
@@ -89,7 +95,11 @@ Observations observe_board(const CameraModel& camera, const SyntheticBoard& boar
       corner.id = id;
       corner.board_point_mm = board.point(id);
       corner.pixel_px = *pixel;
-      if (noise_px > 0) corner.pixel_px += Eigen::Vector2d(noise(rng), noise(rng));
+      if (noise_px > 0) {
+        const double dy = noise(rng);  // y first, as above
+        const double dx = noise(rng);
+        corner.pixel_px += Eigen::Vector2d(dx, dy);
+      }
       view.corners.push_back(corner);
     }
     out.views.push_back(view);
