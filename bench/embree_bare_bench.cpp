@@ -292,6 +292,25 @@ CameraRays make_camera_rays(const CameraModel& cam, const RigidTransform& pose, 
   return r;
 }
 
+// glasspiv's own camera rays alone: pixel_camera_ray (the unprojection, the
+// world ray and its differentials) for every pixel centre, as
+// build_transport_map's rows call it, nothing traced. Its time is what
+// build_transport_map spends per ray before the first segment; the bare
+// tracer's rays come precomputed.
+double camera_ray_pass(const CameraModel& cam, const RigidTransform& pose, int threads) {
+  std::vector<double> per_row(static_cast<std::size_t>(cam.height_px()), 0.0);
+  parallel_rows(cam.height_px(), threads, [&](int row) {
+    double sum = 0;  // kept, so the rays are not optimised away
+    for (int col = 0; col < cam.width_px(); ++col)
+      if (const auto ray = pixel_camera_ray(cam, pose, Eigen::Vector2d(col, row)))
+        sum += ray->direction.x() + ray->ddirection_dpixel(0, 0);
+    per_row[static_cast<std::size_t>(row)] = sum;
+  });
+  double total = 0;
+  for (double v : per_row) total += v;
+  return total;
+}
+
 BareCounts run_bare(const BareTracer& tracer, const CameraRays& rays, int threads) {
   std::vector<BareCounts> per_row(static_cast<std::size_t>(rays.height));
   parallel_rows(rays.height, threads, [&](int row) {
@@ -382,7 +401,8 @@ int main(int argc, char** argv) {
     double mseg_per_s() const { return segments / seconds / 1e6; }
     double mseg_per_cpu_s() const { return segments / cpu_s / 1e6; }
   };
-  std::vector<Run> bare_runs, refr_runs, def_runs, corr_runs;
+  std::vector<Run> bare_runs, refr_runs, def_runs, corr_runs, camera_ray_runs;
+  double camera_ray_checksum = 0;
   BareCounts bare_counts;
   TransportStats refr_stats, def_stats, corr_stats;
   double refr_map_mib = 0, def_map_mib = 0, corr_map_mib = 0;
@@ -407,6 +427,12 @@ int main(int argc, char** argv) {
       bare_counts = run_bare(bare, rays, threads);
       bare_runs.push_back({clock.seconds(), bare_counts.segments, process_cpu_s() - cpu0});
     }
+    {
+      const Stopwatch clock;
+      const double cpu0 = process_cpu_s();
+      camera_ray_checksum += camera_ray_pass(cam, pose, threads);
+      camera_ray_runs.push_back({clock.seconds(), 0, process_cpu_s() - cpu0});
+    }
     trace_map(refraction_only, &refr_runs, &refr_stats, &refr_map_mib);
     trace_map(defaults, &def_runs, &def_stats, &def_map_mib);
     trace_map(correction, &corr_runs, &corr_stats, &corr_map_mib);
@@ -416,6 +442,8 @@ int main(int argc, char** argv) {
     const Run& c = corr_runs.back();
     std::printf("| %d | bare Embree, refraction only | %.3f | %ld | %.2f | %.3f | | %.3f | |\n", rep, b.seconds,
                 b.segments, b.mseg_per_s(), b.seconds / mp, b.cpu_s);
+    std::printf("| %d | glasspiv's camera rays alone (pixel_camera_ray, nothing traced) | %.3f | | | %.3f | | %.3f | |\n",
+                rep, camera_ray_runs.back().seconds, camera_ray_runs.back().seconds / mp, camera_ray_runs.back().cpu_s);
     const auto row = [&](const char* name, const Run& g) {
       std::printf("| %d | glasspiv, %s | %.3f | %ld | %.2f | %.3f | %.3f | %.3f | %.3f |\n", rep, name, g.seconds,
                   g.segments, g.mseg_per_s(), g.seconds / mp, g.mseg_per_s() / b.mseg_per_s(), g.cpu_s,
@@ -457,6 +485,25 @@ int main(int argc, char** argv) {
   std::printf("glasspiv/bare, segments per CPU second (same rep, median): refraction only %.3f, default %.3f, "
               "correction default %.3f\n",
               cpu_ratio_med(refr_runs), cpu_ratio_med(def_runs), cpu_ratio_med(corr_runs));
+  {
+    // Per segment, tracing alone: each build's CPU time less the same rep's
+    // camera-ray pass (glasspiv unprojects inside its build, the bare tracer's
+    // rays are precomputed), against the bare tracer's CPU time.
+    auto trace_only = [&](const std::vector<Run>& runs) {
+      std::vector<double> v;
+      for (std::size_t i = 0; i < runs.size(); ++i) {
+        const double glasspiv = runs[i].segments / (runs[i].cpu_s - camera_ray_runs[i].cpu_s);
+        v.push_back(glasspiv / (bare_runs[i].segments / bare_runs[i].cpu_s));
+      }
+      return median(v);
+    };
+    std::printf("camera rays alone: %.3f CPU s (%.0f ns per pixel, median; checksum %.3g); glasspiv/bare, segments "
+                "per CPU s of tracing (each build less its camera rays; same rep, median): refraction only %.3f, "
+                "default %.3f, correction default %.3f\n",
+                med(camera_ray_runs, [](const Run& r) { return r.cpu_s; }),
+                1e9 * med(camera_ray_runs, [](const Run& r) { return r.cpu_s; }) / (mp * 1e6), camera_ray_checksum,
+                trace_only(refr_runs), trace_only(def_runs), trace_only(corr_runs));
+  }
   const auto scaled = [&](const std::vector<Run>& runs) {
     std::vector<double> v;
     for (std::size_t i = 0; i < runs.size(); ++i) v.push_back(runs[i].seconds / mp * (bare_runs[i].mseg_per_s() / 17.0));

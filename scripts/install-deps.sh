@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages glasspiv builds against. Idempotent: packages
 # already present are not touched, and apt is only called when one is missing.
+# Usage: scripts/install-deps.sh [--clang]   (--clang: also clang 14 and its
+# sanitizer runtimes, for the sanitizer and fuzzing builds)
 set -euo pipefail
 
 packages=(
@@ -12,6 +14,7 @@ packages=(
   libgtest-dev libgmock-dev libtbb-dev
   libembree-dev libopenimageio-dev libassimp-dev libvtk9-dev
 )
+if [ "${1:-}" = "--clang" ]; then packages+=(clang-14 libclang-rt-14-dev); fi
 
 missing=()
 for p in "${packages[@]}"; do

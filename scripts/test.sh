@@ -5,9 +5,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ "${GLASSPIV_SANITIZE:-OFF}" = "ON" ]; then
-  # -O1 and no benchmarks: the sanitizers need no more, and it halves the build.
+  # clang: it builds this tree under ASan + UBSan in well under half GCC's
+  # time. -O1 (the sanitizers need no more), line tables for the reports, no
+  # benchmarks.
+  bash scripts/install-deps.sh --clang
   GLASSPIV_BUILD_DIR=build-sanitize bash scripts/build.sh -DGLASSPIV_SANITIZE=ON -DGLASSPIV_BUILD_BENCH=OFF \
-    -DCMAKE_CXX_FLAGS_RELEASE=-O1 -DCMAKE_C_FLAGS_RELEASE=-O1
+    -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
+    -DCMAKE_CXX_FLAGS_RELEASE="-O1 -gline-tables-only" -DCMAKE_C_FLAGS_RELEASE="-O1 -gline-tables-only"
   ctest --test-dir build-sanitize --output-on-failure --parallel "$(nproc)"
 else
   bash scripts/build.sh

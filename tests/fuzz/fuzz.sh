@@ -30,23 +30,15 @@ all=(scene_yaml camera_glasspiv camera_opencv camera_mrcal camera_davis target_y
      observations_yaml observations_json transport_map correction_operator image)
 if [ $# -gt 0 ]; then harnesses=("$@"); else harnesses=("${all[@]}"); fi
 
-bash scripts/install-deps.sh
-# clang and its sanitizer runtimes, only for fuzzing (the project itself builds with GCC).
-for p in clang-14 libclang-rt-14-dev; do
-  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
-    SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends clang-14 libclang-rt-14-dev
-    break
-  fi
-done
+bash scripts/install-deps.sh --clang
 launcher=()
 if command -v ccache >/dev/null 2>&1; then
   launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
 fi
-# -O1 -g: the sanitizers' usual setting; fast enough and readable stack traces.
+# -O1 with line tables: the sanitizers need no more, and their reports name file and line.
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" \
   -DCMAKE_C_COMPILER="$cc" -DCMAKE_CXX_COMPILER="$cxx" \
-  -DCMAKE_CXX_FLAGS_RELEASE="-O1 -g" -DCMAKE_C_FLAGS_RELEASE="-O1 -g" \
+  -DCMAKE_CXX_FLAGS_RELEASE="-O1 -gline-tables-only" -DCMAKE_C_FLAGS_RELEASE="-O1 -gline-tables-only" \
   -DGLASSPIV_SANITIZE=ON -DGLASSPIV_FUZZ=ON -DGLASSPIV_BUILD_BENCH=OFF >/dev/null
 targets=()
 for h in "${harnesses[@]}"; do targets+=("fuzz_$h" "regress_$h"); done
