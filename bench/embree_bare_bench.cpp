@@ -460,10 +460,15 @@ int main(int argc, char** argv) {
     for (const Run& r : runs) v.push_back(f(r));
     return median(v);
   };
-  auto ratio_med = [&](const std::vector<Run>& runs) {
+  // The median over the reps of f(glasspiv's run, the bare run, the camera-ray
+  // pass), all three of the same rep.
+  auto same_rep_median = [&](const std::vector<Run>& runs, auto f) {
     std::vector<double> v;
-    for (std::size_t i = 0; i < runs.size(); ++i) v.push_back(runs[i].mseg_per_s() / bare_runs[i].mseg_per_s());
+    for (std::size_t i = 0; i < runs.size(); ++i) v.push_back(f(runs[i], bare_runs[i], camera_ray_runs[i]));
     return median(v);
+  };
+  auto ratio_med = [&](const std::vector<Run>& runs) {
+    return same_rep_median(runs, [](const Run& g, const Run& b, const Run&) { return g.mseg_per_s() / b.mseg_per_s(); });
   };
   std::printf("\nmedian of %d reps:\n", reps);
   std::printf("| tracer | s | M segments/s | s per MP | glasspiv/bare, segments/s (same rep) |\n|---|---|---|---|---|\n");
@@ -478,9 +483,8 @@ int main(int argc, char** argv) {
   std::printf("| glasspiv, correction default | %.3f | %.2f | %.3f | %.3f |\n", med(corr_runs, secs),
               med(corr_runs, rate), med(corr_runs, secs) / mp, ratio_med(corr_runs));
   auto cpu_ratio_med = [&](const std::vector<Run>& runs) {
-    std::vector<double> v;
-    for (std::size_t i = 0; i < runs.size(); ++i) v.push_back(runs[i].mseg_per_cpu_s() / bare_runs[i].mseg_per_cpu_s());
-    return median(v);
+    return same_rep_median(runs,
+                           [](const Run& g, const Run& b, const Run&) { return g.mseg_per_cpu_s() / b.mseg_per_cpu_s(); });
   };
   std::printf("glasspiv/bare, segments per CPU second (same rep, median): refraction only %.3f, default %.3f, "
               "correction default %.3f\n",
@@ -490,24 +494,20 @@ int main(int argc, char** argv) {
     // camera-ray pass (glasspiv unprojects inside its build, the bare tracer's
     // rays are precomputed), against the bare tracer's CPU time.
     auto trace_only = [&](const std::vector<Run>& runs) {
-      std::vector<double> v;
-      for (std::size_t i = 0; i < runs.size(); ++i) {
-        const double glasspiv = runs[i].segments / (runs[i].cpu_s - camera_ray_runs[i].cpu_s);
-        v.push_back(glasspiv / (bare_runs[i].segments / bare_runs[i].cpu_s));
-      }
-      return median(v);
+      return same_rep_median(runs, [](const Run& g, const Run& b, const Run& rays) {
+        return g.segments / (g.cpu_s - rays.cpu_s) / b.mseg_per_cpu_s() / 1e6;
+      });
     };
+    const double ray_cpu_s = med(camera_ray_runs, [](const Run& r) { return r.cpu_s; });
     std::printf("camera rays alone: %.3f CPU s (%.0f ns per pixel, median; checksum %.3g); glasspiv/bare, segments "
                 "per CPU s of tracing (each build less its camera rays; same rep, median): refraction only %.3f, "
                 "default %.3f, correction default %.3f\n",
-                med(camera_ray_runs, [](const Run& r) { return r.cpu_s; }),
-                1e9 * med(camera_ray_runs, [](const Run& r) { return r.cpu_s; }) / (mp * 1e6), camera_ray_checksum,
+                ray_cpu_s, 1e9 * ray_cpu_s / (mp * 1e6), camera_ray_checksum,
                 trace_only(refr_runs), trace_only(def_runs), trace_only(corr_runs));
   }
   const auto scaled = [&](const std::vector<Run>& runs) {
-    std::vector<double> v;
-    for (std::size_t i = 0; i < runs.size(); ++i) v.push_back(runs[i].seconds / mp * (bare_runs[i].mseg_per_s() / 17.0));
-    return median(v);
+    return same_rep_median(runs,
+                           [&](const Run& g, const Run& b, const Run&) { return g.seconds / mp * (b.mseg_per_s() / 17.0); });
   };
   std::printf("\ns per MP scaled to a bare tracer at 17 M segments/s (glasspiv s/MP x bare M seg/s / 17, per rep, "
               "median): default %.3f, correction default %.3f\n",
