@@ -1,48 +1,40 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer harnesses (clang 14, ASan + UBSan + libFuzzer) into
-# build-fuzz/ and runs each for a bounded time over its kept corpus
+# the sanitizer build's folder (build-sanitize/) and runs each for a bounded time over its kept corpus
 # (tests/fuzz/corpus/<name>/, read only: new inputs go to
-# build-fuzz/fuzz-work/<name>/). docs/fuzzing.md has the details.
+# build-sanitize/fuzz-work/<name>/). docs/fuzzing.md has the details.
 #
 # Usage: tests/fuzz/fuzz.sh [harness...]     (default: all)
 # Environment:
 #   GLASSPIV_FUZZ_SECONDS  time per harness (default 20)
 #   GLASSPIV_FUZZ_JOBS     parallel fuzzing processes per harness (default 1)
 #   GLASSPIV_FUZZ_PARALLEL harnesses fuzzed at the same time (default: cores / jobs)
-#   GLASSPIV_FUZZ_BUILD_DIR  (default build-fuzz)
+#   GLASSPIV_FUZZ_BUILD_DIR  (default build-sanitize, the sanitizer build's folder)
 #   GLASSPIV_FUZZ_SEED     libFuzzer's -seed (default 1: a run explores the same inputs first
 #                          each time, so CI's short runs repeat; 0: a new random seed per run)
 #   GLASSPIV_FUZZ_EXTRA    more libFuzzer flags, e.g. "-dict=... -max_len=4096"
 # A finding (crash, sanitizer report, leak, timeout, out-of-memory, an
 # exception other than InputError) ends the script with status 1; its
-# reproducer is left in build-fuzz/fuzz-artifacts/<name>/ and printed (base64).
+# reproducer is left in build-sanitize/fuzz-artifacts/<name>/ and printed (base64).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 src="$PWD/tests/fuzz"
-build_dir="$(realpath -m "${GLASSPIV_FUZZ_BUILD_DIR:-build-fuzz}")"
+bash scripts/install-deps.sh --clang
+# The sanitizer build's own configuration and folder: the libraries compiled
+# there for the sanitizer tests serve the harnesses too.
+source scripts/sanitize-options.sh
+build_dir="$(realpath -m "${GLASSPIV_FUZZ_BUILD_DIR:-$sanitize_build_dir}")"
 seconds="${GLASSPIV_FUZZ_SECONDS:-20}"
 jobs="${GLASSPIV_FUZZ_JOBS:-1}"
 seed="${GLASSPIV_FUZZ_SEED:-1}"
-cxx="${GLASSPIV_FUZZ_CXX:-clang++-14}"
-cc="${GLASSPIV_FUZZ_CC:-clang-14}"
 
 all=(scene_yaml camera_glasspiv camera_opencv camera_mrcal camera_davis target_yaml
      observations_yaml observations_json transport_map correction_operator image)
 if [ $# -gt 0 ]; then harnesses=("$@"); else harnesses=("${all[@]}"); fi
 
-bash scripts/install-deps.sh --clang
-launcher=()
-if command -v ccache >/dev/null 2>&1; then
-  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
-fi
-# -O1 with line tables: the sanitizers need no more, and their reports name file and line.
-cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" \
-  -DCMAKE_C_COMPILER="$cc" -DCMAKE_CXX_COMPILER="$cxx" \
-  -DCMAKE_CXX_FLAGS_RELEASE="-O1 -gline-tables-only" -DCMAKE_C_FLAGS_RELEASE="-O1 -gline-tables-only" \
-  -DGLASSPIV_SANITIZE=ON -DGLASSPIV_FUZZ=ON -DGLASSPIV_BUILD_BENCH=OFF >/dev/null
 targets=()
 for h in "${harnesses[@]}"; do targets+=("fuzz_$h" "regress_$h"); done
-cmake --build "$build_dir" --parallel "$(nproc)" --target "${targets[@]}"
+GLASSPIV_BUILD_DIR="$build_dir" GLASSPIV_BUILD_TARGET="${targets[*]}" bash scripts/build.sh "${sanitize_options[@]}"
 
 asan_options="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:symbolize=1}"
 # Leaks inside third-party libraries are suppressed (tests/fuzz/lsan.supp); to
