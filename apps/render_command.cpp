@@ -29,7 +29,7 @@ struct RenderOptions {
   std::string scene, camera, output, sheet_texture, pattern, map, format;
   bool setup = false, no_reflections = false;
   double background = -1, texture_mm_per_px = 0, pattern_mm = 10, particle_density = 2, particle_diameter_mm = 0.2, gain = 1;
-  double min_weight = TraceOptions{}.min_weight;
+  double min_weight = TraceOptions{}.min_weight, min_weight_reflected = TraceOptions{}.min_weight_reflected;
   int max_depth = TraceOptions{}.max_depth, samples = 0, threads = 0, binning = 1;
   std::uint64_t seed = 1;
 };
@@ -130,6 +130,7 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
   const PreparedScene ps = prepare_scene(o.scene, camera_name, o.binning);
   TraceOptions options;
   options.min_weight = o.min_weight;
+  options.min_weight_reflected = o.min_weight_reflected;
   options.max_depth = o.max_depth;
   options.reflections = !o.no_reflections;
   const Camera& camera = ps.camera();
@@ -237,6 +238,11 @@ void register_render_command(CLI::App& app) {
   r->add_option("--samples", o->samples, "Samples per pixel axis (default 1; 2 with --setup)")
       ->check(CLI::Range(1, 16));
   r->add_option("--min-weight", o->min_weight, "Branches below this weight are not followed")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  r->add_option("--min-weight-reflected", o->min_weight_reflected,
+                "Branches reflected at least once are cut below this instead, where it is higher than --min-weight "
+                "(cheaper ghosts; bench/RESULTS.md tables the error)")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   r->add_option("--max-depth", o->max_depth, "Most interface events on one path")

@@ -72,15 +72,18 @@ int main(int argc, char** argv) {
     const char* name;
     bool reflections;
     double min_weight;
+    double min_weight_reflected = 0;
   };
   std::printf("\n| setting | s per MP | camera rays/s | branches/ray | crossings/px | rays in closed form | map MiB |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   for (const Setting& s : {Setting{"refraction only, min_weight 1e-2", false, 1e-2},
                            Setting{"reflections, min_weight 1e-2", true, 1e-2},
+                           Setting{"reflections, min_weight 1e-2, reflected 3e-2", true, 1e-2, 3e-2},
                            Setting{"reflections, min_weight 1e-3", true, 1e-3}}) {
     TraceOptions options;
     options.reflections = s.reflections;
     options.min_weight = s.min_weight;
+    options.min_weight_reflected = s.min_weight_reflected;
     const Stopwatch clock;
     const TransportMap map = build_transport_map(ts, cam, pose, options, 1, threads);
     const double t = clock.seconds();
@@ -127,6 +130,7 @@ int main(int argc, char** argv) {
     int k;
     double min_weight;
     bool reflections;
+    double min_weight_reflected = 0;
     double seconds = 0, crossings_per_px = 0, rms_filtered = 0, rms_point = 0;
   };
   TraceOptions ref_options;
@@ -137,10 +141,14 @@ int main(int argc, char** argv) {
   for (int k : {1, 2, 3})
     for (double mw : {1e-1, 1e-2, 1e-3})
       for (bool refl : {true, false}) rows.push_back({k, mw, refl});
+  // Ghosts cut sooner than the light that was never reflected.
+  for (int k : {1, 2})
+    for (double mwr : {0.02, 0.03, 0.05}) rows.push_back({k, 1e-2, true, mwr});
   for (Row& r : rows) {
     TraceOptions options;
     options.min_weight = r.min_weight;
     options.reflections = r.reflections;
+    options.min_weight_reflected = r.min_weight_reflected;
     const Stopwatch clock;
     const TransportMap map = build_transport_map(ts, tcam, pose, options, r.k, threads);
     r.seconds = clock.seconds();
@@ -151,12 +159,18 @@ int main(int argc, char** argv) {
   std::printf("\nrun time vs error, %dx%d camera, 5 mm checkerboard (0/1), reference 4x4 samples, min_weight 1e-4, "
               "reflections on:\n",
               tcam.width_px(), tcam.height_px());
-  std::printf("| samples/axis | min_weight | reflections | s per MP | crossings/px | RMS error, footprint filter | "
-              "RMS error, point samples |\n|---|---|---|---|---|---|---|\n");
-  for (const Row& r : rows)
-    std::printf("| %d | %.0e | %s | %.3f | %.3f | %.4f | %.4f |\n", r.k, r.min_weight, r.reflections ? "on" : "off",
+  std::printf("| samples/axis | min_weight | reflections (min_weight_reflected) | s per MP | crossings/px | "
+              "RMS error, footprint filter | RMS error, point samples |\n|---|---|---|---|---|---|---|\n");
+  for (const Row& r : rows) {
+    char reflections[32] = "off";
+    if (r.reflections && r.min_weight_reflected > 0)
+      std::snprintf(reflections, sizeof reflections, "on (%g)", r.min_weight_reflected);
+    else if (r.reflections)
+      std::snprintf(reflections, sizeof reflections, "on");
+    std::printf("| %d | %.0e | %s | %.3f | %.3f | %.4f | %.4f |\n", r.k, r.min_weight, reflections,
                 r.seconds / (tcam.width_px() * double(tcam.height_px()) / 1e6), r.crossings_per_px, r.rms_filtered,
                 r.rms_point);
+  }
   std::printf("peak RSS %.1f MiB\n", peak_rss_mib());
 
   if (!picture.empty()) {

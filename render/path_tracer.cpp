@@ -175,14 +175,15 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
   // Whether a child of this weight and depth is followed; the bookkeeping of
   // the ones that are not. Decided before the child is built, so cut branches
   // cost no differentials.
-  auto admit = [&](double weight, int depth) {
+  const double min_weight_reflected = std::max(options.min_weight, options.min_weight_reflected);
+  auto admit = [&](double weight, int depth, bool reflected) {
     if (!(weight > 0)) return false;  // nothing to follow (R = 0 or R = 1 exactly)
     if (depth > options.max_depth) {
       ++result.counts.cut_by_depth;
       result.cut_by_depth_weight += weight;
       return false;
     }
-    if (weight < options.min_weight) {
+    if (weight < (reflected ? min_weight_reflected : options.min_weight)) {
       ++result.counts.cut_by_weight;
       result.cut_by_weight_weight += weight;
       return false;
@@ -320,7 +321,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
         ++result.counts.reflections_skipped;
         result.skipped_reflection_weight += w_reflected;
       }
-    } else if (admit(w_reflected, b.depth + 1)) {
+    } else if (admit(w_reflected, b.depth + 1, true)) {
       Branch& r = child(stack.emplace_back());
       reflect_with_differential(b.direction, b.ddirection, normal, dnormal, &r.direction, &r.ddirection);
       r.origin = spawn_origin(*hit, r.direction, seg_medium == kFluid);
@@ -328,7 +329,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
       r.medium = seg_medium;
       r.any_reflection = true;
     }
-    if (refracted && admit(w_refracted, b.depth + 1)) {
+    if (refracted && admit(w_refracted, b.depth + 1, b.any_reflection)) {
       Branch& t = child(ws.slot[1 - current]);
       t.direction = *refracted;
       const Eigen::Vector3d facing = ndn < 0 ? normal : Eigen::Vector3d(-normal);

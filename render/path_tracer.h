@@ -60,6 +60,12 @@ struct TraceOptions {
   // the reactor 1e-2 renders within 2 % of 1e-3's error in 37 % of its time
   // (bench/RESULTS.md); lower it to follow ghost images of ghost images.
   double min_weight = 1e-2;
+  // Branches that have been reflected at least once (ghost light) are cut
+  // below this instead where it is higher. A ghost that goes on through
+  // sphere after sphere costs most of a render's segments for a few per cent
+  // of the light; bench/RESULTS.md tables what a higher cut costs in error.
+  // 0 (or anything <= min_weight): min_weight applies to every branch.
+  double min_weight_reflected = 0;
   int max_depth = 32;        // most interface events on one path; a deeper branch is cut
 };
 
@@ -99,7 +105,7 @@ struct OpaqueHit {
 
 struct TraceCounts {
   long branches_traced = 0;  // segments followed (the initial ray is one)
-  long cut_by_weight = 0;    // branches with 0 < weight < min_weight not followed
+  long cut_by_weight = 0;    // branches with 0 < weight < min_weight (min_weight_reflected) not followed
   long cut_by_depth = 0;     // branches beyond max_depth not followed
   long tir_events = 0;       // total internal reflections
   long reflections_skipped = 0;  // reflected branches not spawned (options.reflections = false)

@@ -309,6 +309,9 @@ std::uint64_t transport_map_fingerprint(const TraceScene& scene, const CameraMod
   // Options.
   h.boolean(options.reflections);
   h.f64(options.min_weight);
+  // Only where it changes what is traced: maps made before the option existed
+  // keep their fingerprint.
+  if (options.min_weight_reflected > options.min_weight) h.f64(options.min_weight_reflected);
   h.i32(options.max_depth);
   h.i32(samples_per_axis);
   return h.value();

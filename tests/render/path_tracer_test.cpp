@@ -191,6 +191,55 @@ TEST(PathTracer, SlabGhostImagesClosedForm) {
   }
 }
 
+TEST(PathTracer, ReflectedCutOffStopsGhostsOnly) {
+  // The slab's ghosts again, with reflected branches cut below 1e-4: at 45
+  // degrees R = 0.050, so the first ghost (weight (1 - R)^2 R^2 = 2.3e-3, its
+  // parent (1 - R) R^2) is kept and the second (its parent (1 - R) R^4 = 6e-6)
+  // is not; the transmitted path and the bookkeeping are untouched.
+  const double d = 10, n = 1.5, th = 45 * kPi / 180;
+  TraceScene scene;
+  scene.solids.push_back(glass(make_slab(Vector3d(0, 0, 0), Vector3d(0, 0, 1), d, 1e4), n));
+  scene.sheet = sheet_z(50);
+  const Vector3d origin(0, 0, -100), dir(std::sin(th), 0, std::cos(th));
+  TraceOptions all;
+  all.min_weight = 1e-12;
+  TraceOptions cut = all;
+  cut.min_weight_reflected = 1e-4;
+  const TraceResult full = trace_ray(scene, origin, dir, all);
+  const TraceResult r = trace_ray(scene, origin, dir, cut);
+  expect_sane(r);
+  const double R = r_unpolarized(th, 1.0, n);
+  auto find = [](const TraceResult& res, CrossingTag tag, int depth) -> const SheetCrossing* {
+    for (const auto& c : res.crossings)
+      if (c.tag == tag && c.depth == depth) return &c;
+    return nullptr;
+  };
+  const SheetCrossing* main = find(r, CrossingTag::refracted_only, 2);
+  const SheetCrossing* main_full = find(full, CrossingTag::refracted_only, 2);
+  ASSERT_TRUE(main && main_full);
+  EXPECT_EQ(main->s_mm, main_full->s_mm);
+  EXPECT_EQ(main->weight, main_full->weight);
+  const SheetCrossing* ghost1 = find(r, CrossingTag::with_reflections, 4);
+  ASSERT_NE(ghost1, nullptr);
+  EXPECT_NEAR(ghost1->weight, (1 - R) * (1 - R) * R * R, 1e-15);
+  EXPECT_EQ(find(r, CrossingTag::with_reflections, 6), nullptr);
+  ASSERT_NE(find(full, CrossingTag::with_reflections, 6), nullptr);
+  EXPECT_LT(r.counts.branches_traced, full.counts.branches_traced);
+  EXPECT_GT(r.counts.cut_by_weight, 0);
+  // Everything below the reflected cut-off is in the cut bin.
+  EXPECT_GE(r.cut_by_weight_weight, (1 - R) * std::pow(R, 4) * (1 - 1e-9));
+  // At or below min_weight it changes nothing.
+  TraceOptions same = all;
+  same.min_weight_reflected = all.min_weight;
+  const TraceResult r_same = trace_ray(scene, origin, dir, same);
+  ASSERT_EQ(r_same.crossings.size(), full.crossings.size());
+  for (std::size_t i = 0; i < full.crossings.size(); ++i) {
+    EXPECT_EQ(r_same.crossings[i].s_mm, full.crossings[i].s_mm);
+    EXPECT_EQ(r_same.crossings[i].weight, full.crossings[i].weight);
+  }
+  EXPECT_EQ(r_same.counts.branches_traced, full.counts.branches_traced);
+}
+
 TEST(PathTracer, BallLensFocalLength) {
   // Ball lens of diameter D and index n in air: EFL = n D / (4 (n - 1)) from
   // the centre. Rays parallel to the axis at height h cross it at EFL minus the

@@ -253,6 +253,11 @@ TEST(TransportMapFingerprint, SameInputsBuiltTwiceGiveTheSameFingerprint) {
   ASSERT_EQ(c.scene.sheet.origin_mm.x(), 0.0);
   c.scene.sheet.origin_mm.x() = -0.0;
   EXPECT_EQ(c.fingerprint(), a.fingerprint());
+  // A reflected cut-off at or below min_weight traces the same map: the same
+  // fingerprint as without one (maps made before the option keep theirs).
+  Inputs d = a;
+  d.options.min_weight_reflected = d.options.min_weight;
+  EXPECT_EQ(d.fingerprint(), a.fingerprint());
   // The thread count is not an input.
   EXPECT_NE(a.fingerprint(), 0u);
 }
@@ -306,6 +311,8 @@ TEST(TransportMapFingerprint, ChangesWithEverySingleInput) {
       {"pose rotation", [&](Inputs& in) { in.pose.rotation(2, 0) += 1e-12; }},
       {"options.reflections", [&](Inputs& in) { in.options.reflections = !in.options.reflections; }},
       {"options.min_weight", [&](Inputs& in) { in.options.min_weight *= 1.0000001; }},
+      {"options.min_weight_reflected above min_weight",
+       [&](Inputs& in) { in.options.min_weight_reflected = 3 * in.options.min_weight; }},
       {"options.max_depth", [&](Inputs& in) { in.options.max_depth += 1; }},
       {"samples_per_axis", [&](Inputs& in) { in.samples += 1; }},
   };
@@ -326,7 +333,7 @@ TEST(TransportMapFingerprint, ChangesWithEverySingleInput) {
 // hashes the new field; then update the size below. LP64 layouts (Linux x86-64, arm64).
 TEST(TransportMapFingerprint, HashesEveryFieldOfTheInputStructs) {
 #if defined(__LP64__)
-  EXPECT_EQ(sizeof(TraceOptions), 24u) << "TraceOptions changed: hash the new field in transport_map_fingerprint";
+  EXPECT_EQ(sizeof(TraceOptions), 32u) << "TraceOptions changed: hash the new field in transport_map_fingerprint";
   EXPECT_EQ(sizeof(TraceMaterial), 32u) << "TraceMaterial changed: hash the new field";
   EXPECT_EQ(sizeof(SheetPlane), 88u) << "SheetPlane changed: hash the new field";
   EXPECT_EQ(sizeof(TraceScene), 24u + 8u + sizeof(SheetPlane)) << "TraceScene changed: hash the new field";
