@@ -83,7 +83,7 @@ expect_error 2 "frobnicate" "not a command" -- "$glasspiv" frobnicate --help
 expect_error 2 "frobnicate" "glasspiv camera" -- "$glasspiv" camera frobnicate --help
 "$glasspiv" camera show --help | grep -q "^Usage: glasspiv camera show " && ok || fail "usage line does not read 'glasspiv camera show'"
 # Every option with a default shows it in --help.
-for pair in "render:--min-weight" "render:--max-depth" "render:--pattern-mm" "render:--gain" "camera show:--step-px" \
+for pair in "render:--min-weight" "render:--min-weight-reflected" "render:--max-depth" "render:--pattern-mm" "render:--gain" "camera show:--step-px" \
   "camera compare:--step-px" "camera compare:--distance-mm" "correct:--min-weight" "coverage:--min-pixels"; do
   # shellcheck disable=SC2086
   "$glasspiv" ${pair%%:*} --help | grep -qE -- "${pair#*:} .*=[0-9]" && ok || fail "glasspiv ${pair%%:*} --help shows no default of ${pair#*:}"
@@ -160,6 +160,12 @@ expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-texture "$work/lens.tif" 
 grep -q "nothing re-traced" "$work/out" && ok || fail "second render re-traced: $(cat "$work/out")"
 expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern particles -o "$work/lens3.png" --map "$work/lens.tmap" --no-reflections
 grep -q "another setup" "$work/out" && ok || fail "changed settings reused the map: $(cat "$work/out")"
+# A reflected cut-off at or below --min-weight traces the same map; above it, another.
+expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/lens4.png" --map "$work/lens4.tmap"
+expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/lens4.png" --map "$work/lens4.tmap" --min-weight-reflected 0.005
+grep -q "nothing re-traced" "$work/out" && ok || fail "a reflected cut-off below --min-weight re-traced: $(cat "$work/out")"
+expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/lens4.png" --map "$work/lens4.tmap" --min-weight-reflected 0.5
+grep -q "another setup" "$work/out" && ok || fail "a reflected cut-off above --min-weight reused the map: $(cat "$work/out")"
 expect_ok "$glasspiv" render "$work/lens.yaml" --setup -o "$work/setup.png" --format 8 --background 1
 [ -s "$work/setup.png" ] && ok || fail "render --setup wrote nothing"
 cat "$work/lens.yaml" - >"$work/two.yaml" <<'YAML'
@@ -186,7 +192,7 @@ sed 's/material: grey}/material: N-BK7}/' "$work/lens.yaml" >"$work/glassrect.ya
 expect_error 2 "glassrect.yaml" "opaque" -- "$glasspiv" render "$work/glassrect.yaml" --setup -o "$work/x.tif"
 expect_error 2 "lens.tif" "input" -- "$glasspiv" render "$work/lens.yaml" --sheet-texture "$work/lens.tif" -o "$work/lens.tif"
 [ ! -e "$work/x.tif" ] && ok || fail "a failed render wrote an image"
-for opt in --min-weight --background --gain --pattern-mm; do
+for opt in --min-weight --min-weight-reflected --background --gain --pattern-mm; do
   expect_error 2 "$opt" "finite" -- "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/x.tif" "$opt" nan
 done
 expect_error 2 "--seed" "negative" -- "$glasspiv" render "$work/lens.yaml" --sheet-pattern particles -o "$work/x.tif" --seed -1
