@@ -162,11 +162,9 @@ int main(int argc, char** argv) {
   std::printf("| samples/axis | min_weight | reflections (min_weight_reflected) | s per MP | crossings/px | "
               "RMS error, footprint filter | RMS error, point samples |\n|---|---|---|---|---|---|---|\n");
   for (const Row& r : rows) {
-    char reflections[32] = "off";
-    if (r.reflections && r.min_weight_reflected > 0)
-      std::snprintf(reflections, sizeof reflections, "on (%g)", r.min_weight_reflected);
-    else if (r.reflections)
-      std::snprintf(reflections, sizeof reflections, "on");
+    char reflections[32];
+    std::snprintf(reflections, sizeof reflections, r.min_weight_reflected > 0 ? "on (%g)" : r.reflections ? "on" : "off",
+                  r.min_weight_reflected);
     std::printf("| %d | %.0e | %s | %.3f | %.3f | %.4f | %.4f |\n", r.k, r.min_weight, reflections,
                 r.seconds / (tcam.width_px() * double(tcam.height_px()) / 1e6), r.crossings_per_px, r.rms_filtered,
                 r.rms_point);

@@ -9,14 +9,10 @@ cd "$(dirname "$0")/.."
 if [ "${GLASSPIV_SANITIZE:-OFF}" = "ON" ]; then
   bash scripts/install-deps.sh --clang
   source scripts/sanitize-options.sh
-  if [ "${GLASSPIV_SANITIZE_SCOPE:-all}" = "core" ]; then
-    GLASSPIV_BUILD_DIR="$sanitize_build_dir" GLASSPIV_BUILD_TARGET=core_tests \
-      bash scripts/build.sh "${sanitize_options[@]}"
-    ctest --test-dir "$sanitize_build_dir" --output-on-failure --parallel "$(nproc)" -L '^core$'
-  else
-    GLASSPIV_BUILD_DIR="$sanitize_build_dir" bash scripts/build.sh "${sanitize_options[@]}"
-    ctest --test-dir "$sanitize_build_dir" --output-on-failure --parallel "$(nproc)"
-  fi
+  target="" labels=()
+  if [ "${GLASSPIV_SANITIZE_SCOPE:-all}" = "core" ]; then target=core_tests labels=(-L '^core$'); fi
+  GLASSPIV_BUILD_DIR="$sanitize_build_dir" GLASSPIV_BUILD_TARGET="$target" bash scripts/build.sh "${sanitize_options[@]}"
+  ctest --test-dir "$sanitize_build_dir" --output-on-failure --parallel "$(nproc)" "${labels[@]}"
 else
   bash scripts/build.sh
   ctest --test-dir build --output-on-failure --parallel "$(nproc)"
