@@ -2,13 +2,11 @@
 
 #include <algorithm>
 #include <cctype>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
 #include <set>
-#include <stdexcept>
 
 #include <fmt/format.h>
 #include <opencv2/core.hpp>
@@ -17,37 +15,16 @@
 #include "calib/io/camera_file.h"
 #include "util/input_error.h"
 #include "util/text_number.h"
+#include "util/yaml_fields.h"
 
 namespace glasspiv {
 namespace {
 
-
-// OpenCV's parser reports "(LINE): message" in cv::Exception::func; other
-// failures carry their text in cv::Exception::err.
-std::string describe(const cv::Exception& e, int added_lines) {
-  const std::string& func = e.func;
-  const std::size_t close = func.find("): ");
-  if (!func.empty() && func[0] == '(' && close != std::string::npos) {
-    int line = 0;
-    const auto [end, ec] = std::from_chars(func.data() + 1, func.data() + close, line);
-    if (ec == std::errc() && end == func.data() + close)
-      return fmt::format("malformed OpenCV FileStorage YAML, line {}: {}", line - added_lines, func.substr(close + 3));
-  }
-  return "OpenCV FileStorage cannot read it: " + e.err;
-}
-
-// OpenCV 4.6's parser also fails with standard exceptions on some malformed
-// texts (std::length_error from a string it sizes from the input): the file's
-// fault, not an internal error.
-std::string describe(const std::exception& e) {
-  return std::string("OpenCV FileStorage's parser failed on it (") + e.what() + ")";
-}
-
-// OpenCV's FileStorage parser recurses once per level of nesting, so a file
-// nested deep enough overflows the stack (SIGSEGV): measure the depth on the text
-// first. The measure never undercounts: every indentation step, "- " entry and
-// '[' / '{' adds a level (also in comments and strings, which only overcounts),
-// and a ']' / '}' ends one only outside comments and quotes.
+// yaml-cpp's parser recurses once per level of nesting, so a file nested deep
+// enough overflows the stack (SIGSEGV): measure the depth on the text first.
+// The measure never undercounts: every indentation step, "- " entry and '[' /
+// '{' adds a level (also in comments and strings, which only overcounts), and
+// a ']' / '}' ends one only outside comments and quotes.
 void check_nesting_depth(std::string_view text, const std::string& path) {
   std::vector<std::size_t> indents;  // columns of the open block levels
   int flow = 0;
@@ -93,25 +70,48 @@ void check_nesting_depth(std::string_view text, const std::string& path) {
   }
 }
 
-// FileStorage keeps both entries of a key given twice (and reads the first):
-// refuse them, in every mapping.
-void check_unique_keys(const cv::FileNode& node, const std::string& path, const std::string& field) {
-  if (!node.isMap() && !node.isSeq()) return;
-  std::set<std::string> keys;
-  int index = 0;
-  for (cv::FileNodeIterator it = node.begin(); it != node.end(); ++it, ++index) {
-    const cv::FileNode child = *it;
-    std::string name;
-    if (node.isMap()) {
-      name = child.name();
-      if (!keys.insert(name).second)
-        throw InputError(path, field.empty() ? name : field + "." + name,
-                         "appears twice (the key '" + name + "' is given more than once)");
-      name = field.empty() ? name : field + "." + name;
-    } else {
-      name = fmt::format("{}[{}]", field, index);
+// OpenCV's own FileStorage parser (4.6) can loop forever on malformed YAML
+// (tests/fuzz/crashes/camera_opencv/ holds its hangs), so the file is read with
+// yaml-cpp. The "%YAML:1.0" line FileStorage writes is its own spelling of the
+// directive, not YAML's: it becomes a comment, so line numbers stay the file's.
+// A second document is refused before yaml-cpp parses (its LoadAll runs away on
+// some damaged multi-document texts), and FileStorage's JSON is YAML too.
+YAML::Node load_one_mapping(std::string_view contents, const YamlFields& fields) {
+  std::string yaml(contents);
+  if (yaml.compare(0, 3, "\xEF\xBB\xBF") == 0) yaml.erase(0, 3);
+  const std::size_t first = yaml.find_first_not_of(" \t\r\n");
+  if (first != std::string::npos && yaml.compare(first, 6, "%YAML:") == 0) yaml[first] = '#';
+  bool content = false;
+  int line = 0;
+  for (std::size_t pos = 0; pos < yaml.size(); ++line) {
+    const std::size_t eol = std::min(yaml.find('\n', pos), yaml.size());
+    const std::string_view l(yaml.data() + pos, eol - pos);
+    const bool marker = l.rfind("---", 0) == 0 || l.rfind("...", 0) == 0;
+    if (marker && content)
+      throw InputError(fields.path(), "",
+                       fmt::format("line {}: a second YAML document; a camera file holds one", line + 1));
+    const std::size_t indent = l.find_first_not_of(" \t\r");
+    if (!marker && indent != std::string_view::npos && l[indent] != '#') content = true;
+    pos = eol + 1;
+  }
+  return fields.load_mapping(yaml, "OpenCV FileStorage fields (camera_matrix, ...)");
+}
+
+// FileStorage keeps both entries of a key given twice (and reads the first), as
+// yaml-cpp does: refuse them, in every mapping.
+void check_unique_keys(const YAML::Node& node, const std::string& field, const YamlFields& fields) {
+  if (node.IsMap()) {
+    std::set<std::string> keys;
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      if (!it->first.IsScalar()) fields.fail(field, it->first, "has a key that is not a text");
+      const std::string& key = it->first.Scalar();
+      const std::string name = field.empty() ? key : field + "." + key;
+      if (!keys.insert(key).second)
+        fields.fail(name, it->first, "appears twice (the key '" + key + "' is given more than once)");
+      check_unique_keys(it->second, name, fields);
     }
-    check_unique_keys(child, path, name);
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) check_unique_keys(node[i], fmt::format("{}[{}]", field, i), fields);
   }
 }
 
@@ -135,249 +135,141 @@ std::optional<ElementType> element_type(char code) {
   }
 }
 
-class Reader {
+// A matrix read from the file, row-major.
+struct Matrix {
+  int rows = 0, cols = 0;
+  std::vector<double> values;
+  double at(int r, int c) const { return values[static_cast<std::size_t>(r) * cols + c]; }
+};
+
+class Reader : public YamlFields {
  public:
-  Reader(const std::string& path, int added_lines) : path_(path), added_lines_(added_lines) {}
+  using YamlFields::YamlFields;
 
-  [[noreturn]] void fail(const std::string& field, const std::string& problem) const {
-    throw InputError(path_, field, problem);
-  }
-
-  // Runs `read`, turning OpenCV's exceptions into an InputError naming `field`.
-  template <typename F>
-  auto guarded(const std::string& field, F&& read) const -> decltype(read()) {
-    try {
-      return read();
-    } catch (const cv::Exception& e) {
-      fail(field, describe(e, added_lines_));
-    } catch (const InputError&) {
-      throw;
-    } catch (const std::exception& e) {
-      fail(field, describe(e));
-    }
-  }
-
-  double real(const cv::FileNode& node, const std::string& field) const {
-    if (!(node.isInt() || node.isReal())) fail(field, "must be a number");
-    const double value = guarded(field, [&] { return static_cast<double>(node); });
-    if (!std::isfinite(value)) fail(field, fmt::format("must be finite, got {}", value));
-    return value;
-  }
-
-  int image_side(const cv::FileNode& node, const std::string& field) const {
-    if (node.isNone()) fail(field, "missing (required: glasspiv needs the image size to build a camera model)");
-    const double value =
-        node.isInt() ? static_cast<double>(guarded(field, [&] { return static_cast<int>(node); })) : real(node, field);
+  int image_side(const YAML::Node& node, const std::string& field) const {
+    if (!node.IsDefined())
+      throw InputError(path(), field, "missing (required: glasspiv needs the image size to build a camera model)");
+    const double value = real(node, field);
     try {
       return checked_image_side_px(value, field);
     } catch (const InputError& e) {
-      fail(field, e.problem());
+      fail(field, node, e.problem());
     }
   }
 
   // An !!opencv-matrix, or a plain list of numbers (read as one row).
-  cv::Mat matrix(const cv::FileNode& node, const std::string& field) const {
-    cv::Mat m;
-    if (node.isSeq()) {
-      m = cv::Mat(1, static_cast<int>(node.size()), CV_64F);
-      for (int i = 0; i < m.cols; ++i) m.at<double>(0, i) = real(node[i], fmt::format("{}[{}]", field, i));
+  Matrix matrix(const YAML::Node& node, const std::string& field) const {
+    if (node.IsSequence()) {
+      Matrix m{1, static_cast<int>(node.size()), reals(node, field)};
+      if (m.cols == 0) m.rows = 0;
       return m;
     }
-    if (!node.isMap() || node["rows"].isNone() || node["cols"].isNone() || node["data"].isNone())
-      fail(field, "must be an !!opencv-matrix (rows, cols, dt, data) or a list of numbers");
-    // Read by hand rather than by OpenCV's `node >> m`, which converts every
-    // value to `dt` silently (dt: u turns 600 into 255).
-    auto count = [&](const char* key) {
-      const cv::FileNode n = node[key];
-      const std::string f = field + "." + key;
-      if (!n.isInt()) fail(f, "must be a whole number");
-      const int value = guarded(f, [&] { return static_cast<int>(n); });
-      if (value < 0) fail(f, fmt::format("must not be negative, is {}", value));
-      return value;
-    };
-    const int rows = count("rows"), cols = count("cols");
-    const cv::FileNode dt_node = node["dt"];
-    if (dt_node.isNone()) fail(field + ".dt", "missing (the element type, e.g. d for double)");
-    if (!dt_node.isString()) fail(field + ".dt", "must be an OpenCV element type such as d or f");
-    const std::string dt = dt_node.string();
+    if (!node.IsMap() || !node["rows"].IsDefined() || !node["cols"].IsDefined() || !node["data"].IsDefined())
+      fail(field, node, "must be an !!opencv-matrix (rows, cols, dt, data) or a list of numbers");
+    // dt is checked rather than trusted: OpenCV's `node >> m` converts every
+    // value to it silently (dt: u turns 600 into 255).
+    const int rows = whole(node["rows"], field + ".rows", 0), cols = whole(node["cols"], field + ".cols", 0);
+    const YAML::Node dt_node = node["dt"];
+    if (!dt_node.IsDefined()) fail(field + ".dt", node, "missing (the element type, e.g. d for double)");
+    const std::string dt = text(dt_node, field + ".dt");
     std::size_t digits = 0;
     while (digits < dt.size() && std::isdigit(static_cast<unsigned char>(dt[digits]))) ++digits;
     if (digits > 0 && dt.substr(0, digits) != "1" && dt.size() == digits + 1 && element_type(dt.back()))
-      fail(field, fmt::format("must have one channel, dt '{}' has {}", dt, dt.substr(0, digits)));
+      fail(field, dt_node, fmt::format("must have one channel, dt '{}' has {}", dt, dt.substr(0, digits)));
     const std::optional<ElementType> type =
         dt.size() == digits + 1 ? element_type(dt.back()) : std::optional<ElementType>();
     if (!type)
-      fail(field + ".dt",
+      fail(field + ".dt", dt_node,
            fmt::format("element type '{}' is not one glasspiv reads (d, f, i, s, w, c or u, one channel)", dt));
-    const cv::FileNode data = node["data"];
-    if (!data.isSeq()) fail(field + ".data", "must be a list of numbers");
+    const YAML::Node data = node["data"];
+    if (!data.IsSequence()) fail(field + ".data", data, "must be a list of numbers");
     const std::int64_t expected = static_cast<std::int64_t>(rows) * cols;
     if (static_cast<std::int64_t>(data.size()) != expected)
-      fail(field, fmt::format("rows x cols = {} x {} = {} elements, but data has {}", rows, cols, expected,
-                              data.size()));
-    if (expected == 0) return cv::Mat(0, 0, CV_64F);
-    cv::Mat d(rows, cols, CV_64F);
-    for (int r = 0; r < rows; ++r)
-      for (int c = 0; c < cols; ++c) {
-        const std::string f = fmt::format("{}.data[{}]", field, r * cols + c);
-        double v = real(data[r * cols + c], f);
-        if (v < type->min || v > type->max || (type->whole && v != std::floor(v)))
-          fail(f, fmt::format("element ({}, {}) = {} does not fit dt '{}' ({} {} to {})", r, c, format_number(v),
-                              type->code, type->whole ? "whole numbers" : "numbers", format_number(type->min),
-                              format_number(type->max)));
-        if (type->code == 'f') v = static_cast<float>(v);  // what a 32-bit matrix holds
-        d.at<double>(r, c) = v;
-      }
-    return d;
+      fail(field, node,
+           fmt::format("rows x cols = {} x {} = {} elements, but data has {}", rows, cols, expected, data.size()));
+    Matrix m{expected == 0 ? 0 : rows, expected == 0 ? 0 : cols, {}};
+    for (std::int64_t i = 0; i < expected; ++i) {
+      const std::string f = fmt::format("{}.data[{}]", field, i);
+      double v = real(data[static_cast<std::size_t>(i)], f);
+      if (v < type->min || v > type->max || (type->whole && v != std::floor(v)))
+        fail(f, data[static_cast<std::size_t>(i)],
+             fmt::format("element ({}, {}) = {} does not fit dt '{}' ({} {} to {})", i / cols, i % cols,
+                         format_number(v), type->code, type->whole ? "whole numbers" : "numbers",
+                         format_number(type->min), format_number(type->max)));
+      if (type->code == 'f') v = static_cast<float>(v);  // what a 32-bit matrix holds
+      m.values.push_back(v);
+    }
+    return m;
   }
 
   // A 1xN or Nx1 matrix (or list) as a vector.
-  std::vector<double> vector(const cv::FileNode& node, const std::string& field) const {
-    const cv::Mat m = matrix(node, field);
-    if (m.empty()) return {};
-    if (m.rows != 1 && m.cols != 1)
-      fail(field, fmt::format("must be a 1xN or Nx1 matrix, is {}x{}", m.rows, m.cols));
-    return std::vector<double>(m.begin<double>(), m.end<double>());
+  std::vector<double> vector(const YAML::Node& node, const std::string& field) const {
+    Matrix m = matrix(node, field);
+    if (m.rows != 1 && m.cols != 1 && !m.values.empty())
+      fail(field, node, fmt::format("must be a 1xN or Nx1 matrix, is {}x{}", m.rows, m.cols));
+    return std::move(m.values);
   }
-
- private:
-  const std::string& path_;
-  int added_lines_;
 };
-
-// OpenCV 4.6's FileStorage parser can loop forever on malformed YAML (the
-// reproducers in tests/fuzz/crashes/camera_opencv/): it only ever sees one
-// document that yaml-cpp has parsed as a well-formed mapping first. OpenCV's
-// "%YAML:1.0" line is its own spelling of the directive, not YAML's, so it is
-// left out; a second document is refused before either parser sees it
-// (yaml-cpp's LoadAll itself runs away on some damaged multi-document texts).
-// The parser also loops on some texts yaml-cpp reads as a mapping whose keys
-// are indented (every reproducer so far), so the top level must start in the
-// first column, as FileStorage writes it.
-void check_one_mapping(std::string_view contents, const std::string& path) {
-  std::string yaml(contents);
-  int skipped_lines = 0;
-  const std::size_t first = yaml.find_first_not_of(" \t\r\n");
-  if (first != std::string::npos && yaml.compare(first, 6, "%YAML:") == 0) {
-    const std::size_t eol = yaml.find('\n', first);
-    yaml = eol == std::string::npos ? std::string() : yaml.substr(eol + 1);
-    skipped_lines = 1;
-  }
-  bool content = false;
-  int line = skipped_lines;
-  for (std::size_t pos = 0; pos < yaml.size(); ++line) {
-    const std::size_t eol = std::min(yaml.find('\n', pos), yaml.size());
-    const std::string_view l(yaml.data() + pos, eol - pos);
-    const bool marker = l.rfind("---", 0) == 0 || l.rfind("...", 0) == 0;
-    if (marker && content)
-      throw InputError(path, "", fmt::format("line {}: a second YAML document; a camera file holds one", line + 1));
-    const std::size_t indent = l.find_first_not_of(" \t\r");
-    if (!marker && indent != std::string_view::npos && l[indent] != '#') {
-      if (!content && indent > 0)
-        throw InputError(path, "",
-                         fmt::format("line {}: the top-level keys must start in the first column, as OpenCV "
-                                     "FileStorage writes them",
-                                     line + 1));
-      content = true;
-    }
-    pos = eol + 1;
-  }
-  try {
-    if (!YAML::Load(yaml).IsMap())
-      throw InputError(path, "", "expected a mapping of OpenCV FileStorage fields (camera_matrix, ...)");
-  } catch (const YAML::Exception& e) {
-    throw InputError(path, "", fmt::format("malformed YAML, line {}: {}", e.mark.line + 1 + skipped_lines, e.msg));
-  }
-}
 
 std::vector<Camera> parse(std::string_view contents, const std::string& path) {
   check_nesting_depth(contents, path);
-  check_one_mapping(contents, path);
-  std::string text(contents);
-  if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);
-  // In memory, FileStorage recognises YAML by its %YAML directive only.
-  const std::size_t first = text.find_first_not_of(" \t\r\n");
-  int added_lines = 0;
-  if (first == std::string::npos || (text.compare(first, 5, "%YAML") != 0 && text[first] != '{')) {
-    text = "%YAML:1.0\n" + text;
-    added_lines = 1;
-  }
-  cv::FileStorage fs;
-  try {
-    if (!fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY))
-      throw InputError(path, "", "OpenCV FileStorage cannot open it");
-  } catch (const cv::Exception& e) {
-    throw InputError(path, "", describe(e, added_lines));
-  } catch (const InputError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw InputError(path, "", describe(e));
-  }
-  const Reader r(path, added_lines);
-  const cv::FileNode root = r.guarded("", [&] { return fs.root(); });
-  if (!root.isMap()) r.fail("", "expected a mapping of OpenCV FileStorage fields (camera_matrix, ...)");
-  r.guarded("", [&] {
-    check_unique_keys(root, path, "");
-    return 0;
-  });
-  auto node = [&](const char* key) { return r.guarded(key, [&] { return root[key]; }); };
+  const Reader r(path);
+  const YAML::Node root = load_one_mapping(contents, r);
+  check_unique_keys(root, "", r);
+  auto node = [&](const char* key) { return root[key]; };
 
   std::string name = camera_file_detail::default_camera_name(path);
-  if (const cv::FileNode n = node("camera_name"); !n.isNone()) {
-    if (!n.isString()) r.fail("camera_name", "must be a text");
-    name = n.string();
-  }
+  if (const YAML::Node n = node("camera_name"); n.IsDefined()) name = r.text(n, "camera_name");
 
   const int width = r.image_side(node("image_width"), "image_width");
   const int height = r.image_side(node("image_height"), "image_height");
   camera_file_detail::checked_image_size(width, height, path, "image_width");
 
-  const cv::FileNode k_node = node("camera_matrix");
-  if (k_node.isNone()) r.fail("camera_matrix", "missing (required)");
-  const cv::Mat k = r.matrix(k_node, "camera_matrix");
-  if (k.rows != 3 || k.cols != 3) r.fail("camera_matrix", fmt::format("must be a 3x3 matrix, is {}x{}", k.rows, k.cols));
-  if (k.at<double>(0, 1) != 0)
-    r.fail("camera_matrix",
+  const YAML::Node k_node = node("camera_matrix");
+  if (!k_node.IsDefined()) throw InputError(path, "camera_matrix", "missing (required)");
+  const Matrix k = r.matrix(k_node, "camera_matrix");
+  if (k.rows != 3 || k.cols != 3)
+    r.fail("camera_matrix", k_node, fmt::format("must be a 3x3 matrix, is {}x{}", k.rows, k.cols));
+  if (k.at(0, 1) != 0)
+    r.fail("camera_matrix", k_node,
            fmt::format("has skew K(0,1) = {}; glasspiv's model (like OpenCV's calibrateCamera) has none",
-                       format_real(k.at<double>(0, 1))));
-  if (k.at<double>(1, 0) != 0)
-    r.fail("camera_matrix", fmt::format("K(1,0) = {} must be 0", format_real(k.at<double>(1, 0))));
-  if (k.at<double>(2, 0) != 0 || k.at<double>(2, 1) != 0 || k.at<double>(2, 2) != 1)
-    r.fail("camera_matrix", fmt::format("last row must be (0, 0, 1), is ({}, {}, {})", format_real(k.at<double>(2, 0)),
-                                        format_real(k.at<double>(2, 1)), format_real(k.at<double>(2, 2))));
-  if (!(k.at<double>(0, 0) > 0) || !(k.at<double>(1, 1) > 0))
-    r.fail("camera_matrix", "focal lengths K(0,0) and K(1,1) must be positive");
+                       format_real(k.at(0, 1))));
+  if (k.at(1, 0) != 0) r.fail("camera_matrix", k_node, fmt::format("K(1,0) = {} must be 0", format_real(k.at(1, 0))));
+  if (k.at(2, 0) != 0 || k.at(2, 1) != 0 || k.at(2, 2) != 1)
+    r.fail("camera_matrix", k_node,
+           fmt::format("last row must be (0, 0, 1), is ({}, {}, {})", format_real(k.at(2, 0)), format_real(k.at(2, 1)),
+                       format_real(k.at(2, 2))));
+  if (!(k.at(0, 0) > 0) || !(k.at(1, 1) > 0))
+    r.fail("camera_matrix", k_node, "focal lengths K(0,0) and K(1,1) must be positive");
 
-  const cv::FileNode d_node = node("distortion_coefficients");
-  if (d_node.isNone())
-    r.fail("distortion_coefficients",
-           "missing (required; write an empty matrix or [] for a camera without distortion)");
+  const YAML::Node d_node = node("distortion_coefficients");
+  if (!d_node.IsDefined())
+    throw InputError(path, "distortion_coefficients",
+                     "missing (required; write an empty matrix or [] for a camera without distortion)");
   const std::vector<double> distortion = r.vector(d_node, "distortion_coefficients");
   lens_model_for_count(distortion.size(), "distortion_coefficients");  // throws for other lengths
 
   std::optional<double> pitch_um;
-  if (const cv::FileNode n = node("pixel_pitch_um"); !n.isNone()) {
+  if (const YAML::Node n = node("pixel_pitch_um"); n.IsDefined()) {
     pitch_um = r.real(n, "pixel_pitch_um");
     if (const std::string problem = camera_file_detail::pixel_pitch_problem(*pitch_um); !problem.empty())
-      r.fail("pixel_pitch_um", fmt::format("{}, got {}", problem, *pitch_um));
+      r.fail("pixel_pitch_um", n, fmt::format("{}, got {}", problem, *pitch_um));
   }
 
   std::optional<RigidTransform> pose;
-  const cv::FileNode rvec_node = node("rvec"), tvec_node = node("tvec");
-  if (!rvec_node.isNone() || !tvec_node.isNone()) {
-    if (rvec_node.isNone()) r.fail("rvec", "missing (tvec is given; the pose needs both)");
-    if (tvec_node.isNone()) r.fail("tvec", "missing (rvec is given; the pose needs both)");
+  const YAML::Node rvec_node = node("rvec"), tvec_node = node("tvec");
+  if (rvec_node.IsDefined() || tvec_node.IsDefined()) {
+    if (!rvec_node.IsDefined()) throw InputError(path, "rvec", "missing (tvec is given; the pose needs both)");
+    if (!tvec_node.IsDefined()) throw InputError(path, "tvec", "missing (rvec is given; the pose needs both)");
     const std::vector<double> rv = r.vector(rvec_node, "rvec");
     const std::vector<double> tv = r.vector(tvec_node, "tvec");
-    if (rv.size() != 3) r.fail("rvec", fmt::format("must have 3 elements, has {}", rv.size()));
-    if (tv.size() != 3) r.fail("tvec", fmt::format("must have 3 elements, has {}", tv.size()));
+    if (rv.size() != 3) r.fail("rvec", rvec_node, fmt::format("must have 3 elements, has {}", rv.size()));
+    if (tv.size() != 3) r.fail("tvec", tvec_node, fmt::format("must have 3 elements, has {}", tv.size()));
     pose = RigidTransform::from_rvec_tvec({rv[0], rv[1], rv[2]}, {tv[0], tv[1], tv[2]});
   }
 
-  return {Camera{name,
-                 CameraModel(width, height, k.at<double>(0, 0), k.at<double>(1, 1), k.at<double>(0, 2),
-                             k.at<double>(1, 2), distortion),
-                 pose, pitch_um}};
+  return {Camera{name, CameraModel(width, height, k.at(0, 0), k.at(1, 1), k.at(0, 2), k.at(1, 2), distortion), pose,
+                 pitch_um}};
 }
 
 }  // namespace
@@ -387,8 +279,8 @@ std::vector<Camera> parse_opencv_yaml(std::string_view contents, const std::stri
     return parse(contents, path);
   } catch (const InputError&) {
     camera_file_detail::rethrow_naming_file(path);
-  } catch (const cv::Exception& e) {
-    throw InputError(path, "", describe(e, 0));
+  } catch (const YAML::Exception& e) {
+    throw InputError(path, "", fmt::format("malformed YAML, line {}: {}", e.mark.line + 1, e.msg));
   }
 }
 

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
 
 #include "calib/io/davis_xml.h"
 #include "calib/io/glasspiv_yaml.h"
@@ -251,6 +252,36 @@ TEST(CameraFileRoundTrip, DavisHoldsSeveralCamerasAndTheirNames) {
     EXPECT_EQ(back[i].name, cameras[i].name);
     EXPECT_EQ(back[i].model.intrinsics(), cameras[i].model.intrinsics());
     expect_same_pose(back[i].camera_from_world, cameras[i].camera_from_world);
+  }
+}
+
+// What OpenCV's calibration sample saves, written by cv::FileStorage itself
+// (YAML and JSON): read exactly, though glasspiv reads it with yaml-cpp.
+TEST(CameraFileRoundTrip, ReadsWhatFileStorageWritesAsYamlAndJson) {
+  std::mt19937 rng(17);
+  for (int format : {cv::FileStorage::FORMAT_YAML, cv::FileStorage::FORMAT_JSON}) {
+    for (LensModel model : {LensModel::OpenCV5, LensModel::OpenCV8, LensModel::OpenCV14}) {
+      SCOPED_TRACE((format == cv::FileStorage::FORMAT_JSON ? "JSON " : "YAML ") + lens_model_name(model));
+      const Camera camera = random_camera(rng, model, true, false, "");
+      const CameraModel& m = camera.model;
+      const std::vector<double> d = m.distortion();
+      cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | format);
+      fs << "calibration_time" << "Thu Dec  3 2026";
+      fs << "image_width" << m.width_px() << "image_height" << m.height_px();
+      fs << "camera_matrix" << (cv::Mat_<double>(3, 3) << m.fx_px(), 0, m.cx_px(), 0, m.fy_px(), m.cy_px(), 0, 0, 1);
+      fs << "distortion_coefficients" << cv::Mat(d, true).reshape(1, 1);
+      fs << "avg_reprojection_error" << 0.25;
+      const Eigen::Vector3d rvec = camera.camera_from_world->rvec();
+      const Eigen::Vector3d& t = camera.camera_from_world->translation_mm;
+      fs << "rvec" << (cv::Mat_<double>(3, 1) << rvec.x(), rvec.y(), rvec.z());
+      fs << "tvec" << (cv::Mat_<double>(1, 3) << t.x(), t.y(), t.z());
+      const std::string text = fs.releaseAndGetString();
+      EXPECT_EQ(detect_format(text, "cam.yaml"), CameraFileFormat::OpenCV) << text;
+      const std::vector<Camera> back = parse_cameras(text, CameraFileFormat::OpenCV, "cam.yaml");
+      ASSERT_EQ(back.size(), 1u);
+      expect_same_intrinsics(back[0].model, m);
+      expect_same_pose(back[0].camera_from_world, camera.camera_from_world);
+    }
   }
 }
 
