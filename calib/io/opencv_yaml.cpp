@@ -98,22 +98,43 @@ YAML::Node load_one_mapping(std::string_view contents, const YamlFields& fields)
 }
 
 // FileStorage keeps both entries of a key given twice (and reads the first), as
-// yaml-cpp does: refuse them, in every mapping.
-void check_unique_keys(const YAML::Node& node, const std::string& field, const YamlFields& fields) {
-  if (node.IsMap()) {
-    std::set<std::string> keys;
-    for (auto it = node.begin(); it != node.end(); ++it) {
-      if (!it->first.IsScalar()) fields.fail(field, it->first, "has a key that is not a text");
-      const std::string& key = it->first.Scalar();
-      const std::string name = field.empty() ? key : field + "." + key;
-      if (!keys.insert(key).second)
-        fields.fail(name, it->first, "appears twice (the key '" + key + "' is given more than once)");
-      check_unique_keys(it->second, name, fields);
+// yaml-cpp does: refuse them, in every mapping. FileStorage has no anchors or
+// aliases; through them yaml-cpp's tree can be deeper than the text's nesting
+// and repeat a subtree without end ("billion laughs"), so the walk is bounded in
+// depth and in nodes: a tree without aliases has fewer nodes than its text has
+// characters.
+class UniqueKeys {
+ public:
+  UniqueKeys(const YamlFields& fields, std::size_t text_size) : fields_(fields), budget_(text_size + 16) {}
+
+  void check(const YAML::Node& node, const std::string& field, int depth = 0) {
+    if (depth > kMaxOpenCVNestingDepth)
+      fields_.fail(field, node,
+                   fmt::format("nested more than {} levels deep through YAML aliases; glasspiv reads OpenCV "
+                               "FileStorage files nested at most {} levels",
+                               kMaxOpenCVNestingDepth, kMaxOpenCVNestingDepth));
+    if (budget_-- == 0)
+      fields_.fail(field, node, "holds more values than its text spells out (YAML aliases repeat them); OpenCV "
+                                "FileStorage files have no aliases");
+    if (node.IsMap()) {
+      std::set<std::string> keys;
+      for (auto it = node.begin(); it != node.end(); ++it) {
+        if (!it->first.IsScalar()) fields_.fail(field, it->first, "has a key that is not a text");
+        const std::string& key = it->first.Scalar();
+        const std::string name = field.empty() ? key : field + "." + key;
+        if (!keys.insert(key).second)
+          fields_.fail(name, it->first, "appears twice (the key '" + key + "' is given more than once)");
+        check(it->second, name, depth + 1);
+      }
+    } else if (node.IsSequence()) {
+      for (std::size_t i = 0; i < node.size(); ++i) check(node[i], fmt::format("{}[{}]", field, i), depth + 1);
     }
-  } else if (node.IsSequence()) {
-    for (std::size_t i = 0; i < node.size(); ++i) check_unique_keys(node[i], fmt::format("{}[{}]", field, i), fields);
   }
-}
+
+ private:
+  const YamlFields& fields_;
+  std::size_t budget_;
+};
 
 // An OpenCV element type code ("d", "f", "u", ...): the range of values it
 // holds exactly, or nullopt for codes glasspiv does not read.
@@ -215,7 +236,7 @@ std::vector<Camera> parse(std::string_view contents, const std::string& path) {
   check_nesting_depth(contents, path);
   const Reader r(path);
   const YAML::Node root = load_one_mapping(contents, r);
-  check_unique_keys(root, "", r);
+  UniqueKeys(r, contents.size()).check(root, "");
   auto node = [&](const char* key) { return root[key]; };
 
   std::string name = camera_file_detail::default_camera_name(path);

@@ -784,6 +784,21 @@ std::vector<BadInput> bad_inputs() {
          for (int i = 0; i < 200; ++i) t += std::string(static_cast<std::size_t>(i), ' ') + "k:\n";
          return t + std::string(200, ' ') + "k: 1\n";
        }(), {"nested more than 64 levels"}},
+      {"billion laughs", F::OpenCV, [&] {
+         std::string t = o + "l0: &l0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n";
+         for (int i = 1; i < 12; ++i) {
+           t += "l" + std::to_string(i) + ": &l" + std::to_string(i) + " [";
+           for (int j = 0; j < 10; ++j) t += "*l" + std::to_string(i - 1) + ", ";
+           t += "1]\n";
+         }
+         return t;
+       }(), {"aliases"}},
+      {"deep nesting through aliases", F::OpenCV, [&] {
+         std::string t = o + "a0: &a0 [1]\n";
+         for (int i = 1; i < 100; ++i)
+           t += "a" + std::to_string(i) + ": &a" + std::to_string(i) + " [*a" + std::to_string(i - 1) + "]\n";
+         return t;
+       }(), {"aliases"}},  // the node budget or the depth bound, whichever trips first
       {"deep JSON nesting", F::OpenCV,
        "{\"camera_matrix\": 1, \"x\": " + std::string(50000, '[') + std::string(50000, ']') + "}",
        {"nested more than 64 levels"}},
