@@ -52,6 +52,7 @@
 #include "correct/correction_defaults.h"
 #include "render/parallel_rows.h"
 #include "render/path_tracer.h"
+#include "render/row_camera_rays.h"
 #include "render/scene_yaml.h"
 #include "render/trace_scene_builder.h"
 #include "render/transport_map.h"
@@ -292,18 +293,18 @@ CameraRays make_camera_rays(const CameraModel& cam, const RigidTransform& pose, 
   return r;
 }
 
-// glasspiv's own camera rays alone: pixel_camera_ray (the unprojection, the
+// glasspiv's own camera rays alone: RowCameraRays (the unprojection, the
 // world ray and its differentials) for every pixel centre, as
-// build_transport_map's rows call it, nothing traced. Its time is what
+// build_transport_map's rows make them, nothing traced. Its time is what
 // build_transport_map spends per ray before the first segment; the bare
 // tracer's rays come precomputed.
 double camera_ray_pass(const CameraModel& cam, const RigidTransform& pose, int threads) {
   std::vector<double> per_row(static_cast<std::size_t>(cam.height_px()), 0.0);
   parallel_rows(cam.height_px(), threads, [&](int row) {
     double sum = 0;  // kept, so the rays are not optimised away
+    RowCameraRays rays(cam, pose, row, 1);
     for (int col = 0; col < cam.width_px(); ++col)
-      if (const auto ray = pixel_camera_ray(cam, pose, Eigen::Vector2d(col, row)))
-        sum += ray->direction.x() + ray->ddirection_dpixel(0, 0);
+      if (const std::optional<CameraRay>& ray = rays.next()) sum += ray->direction.x() + ray->ddirection_dpixel(0, 0);
     per_row[static_cast<std::size_t>(row)] = sum;
   });
   double total = 0;
@@ -442,7 +443,7 @@ int main(int argc, char** argv) {
     const Run& c = corr_runs.back();
     std::printf("| %d | bare Embree, refraction only | %.3f | %ld | %.2f | %.3f | | %.3f | |\n", rep, b.seconds,
                 b.segments, b.mseg_per_s(), b.seconds / mp, b.cpu_s);
-    std::printf("| %d | glasspiv's camera rays alone (pixel_camera_ray, nothing traced) | %.3f | | | %.3f | | %.3f | |\n",
+    std::printf("| %d | glasspiv's camera rays alone (RowCameraRays, nothing traced) | %.3f | | | %.3f | | %.3f | |\n",
                 rep, camera_ray_runs.back().seconds, camera_ray_runs.back().seconds / mp, camera_ray_runs.back().cpu_s);
     const auto row = [&](const char* name, const Run& g) {
       std::printf("| %d | glasspiv, %s | %.3f | %ld | %.2f | %.3f | %.3f | %.3f | %.3f |\n", rep, name, g.seconds,

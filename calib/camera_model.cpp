@@ -117,6 +117,12 @@ CameraModel::CameraModel(int width_px, int height_px, double fx_px, double fy_px
   intrinsics_ = {fx_px, fy_px, cx_px, cy_px};
   std::copy(distortion.begin(), distortion.end(), intrinsics_.begin() + 4);
   tilted_ = lens_model_ == LensModel::OpenCV14;
+  const auto nonzero = [&](int first, int last) {
+    return std::any_of(intrinsics_.begin() + 4 + first, intrinsics_.begin() + 4 + last + 1,
+                       [](double c) { return c != 0; });
+  };
+  rational_ = nonzero(5, 7);
+  prism_ = nonzero(8, 11);
   if (tilted_) tilt_projection_matrix(intrinsics_[4 + 12], intrinsics_[4 + 13], tilt_.data());
   find_fold_radii();
 }
@@ -131,13 +137,20 @@ Eigen::Matrix3d CameraModel::camera_matrix() const {
   return k;
 }
 
-Eigen::Vector2d CameraModel::project_normalized(const Eigen::Vector2d& normalized,
-                                                Eigen::Matrix2d* d_pixel_d_normalized) const {
+// Inlined into Newton's loops: its Jacobian stays in registers, and the
+// interleaved pixels of unproject_batch overlap.
+[[gnu::always_inline]] inline Eigen::Vector2d CameraModel::project_normalized_inline(
+    const Eigen::Vector2d& normalized, Eigen::Matrix2d* d_pixel_d_normalized) const {
   double xd, yd, j[4];
   distort(intrinsics_.data() + 4, tilted_ ? tilt_.data() : nullptr, normalized.x(), normalized.y(), &xd, &yd,
-          d_pixel_d_normalized ? j : nullptr);
+          d_pixel_d_normalized ? j : nullptr, rational_, prism_);
   if (d_pixel_d_normalized) *d_pixel_d_normalized << fx_px() * j[0], fx_px() * j[1], fy_px() * j[2], fy_px() * j[3];
   return {fx_px() * xd + cx_px(), fy_px() * yd + cy_px()};
+}
+
+Eigen::Vector2d CameraModel::project_normalized(const Eigen::Vector2d& normalized,
+                                                Eigen::Matrix2d* d_pixel_d_normalized) const {
+  return project_normalized_inline(normalized, d_pixel_d_normalized);
 }
 
 std::optional<Eigen::Vector2d> CameraModel::project(const Eigen::Vector3d& p,
@@ -209,12 +222,12 @@ UnprojectResult CameraModel::unproject(const Eigen::Vector2d& pixel, double tole
   Eigen::Vector2d n = target;  // the undistorted guess is close for realistic lenses
   result.dpixel_dnormalized = Eigen::Vector2d(fx_px(), fy_px()).asDiagonal();
   if (lens_model_ != LensModel::Pinhole) {
-    constexpr int kMaxIterations = 100;
     Eigen::Matrix2d j;
     Eigen::Vector2d error = project_normalized(n, &j) - pixel;
-    bool converged = error.norm() <= tolerance_px;
+    double error_norm = error.norm();
+    bool converged = error_norm <= tolerance_px;
     int it = 0;
-    for (; it < kMaxIterations && !converged; ++it) {
+    for (; it < kMaxUnprojectIterations && !converged; ++it) {
       const double det = j.determinant();
       if (!(std::abs(det) > 0) || !std::isfinite(det)) break;
       const Eigen::Vector2d step = j.inverse() * error;
@@ -223,11 +236,13 @@ UnprojectResult CameraModel::unproject(const Eigen::Vector2d& pixel, double tole
       double scale = 1.0;
       Eigen::Vector2d trial_n, trial_error;
       Eigen::Matrix2d trial_j;
+      double trial_norm = 0;
       bool improved = false;
       for (int halving = 0; halving < 30; ++halving, scale *= 0.5) {
         trial_n = n - scale * step;
         trial_error = project_normalized(trial_n, &trial_j) - pixel;
-        if (trial_error.allFinite() && trial_error.norm() < error.norm()) {
+        trial_norm = trial_error.norm();
+        if (trial_error.allFinite() && trial_norm < error_norm) {
           improved = true;
           break;
         }
@@ -235,24 +250,93 @@ UnprojectResult CameraModel::unproject(const Eigen::Vector2d& pixel, double tole
       if (!improved) break;
       n = trial_n;
       error = trial_error;
+      error_norm = trial_norm;
       j = trial_j;
-      converged = error.norm() <= tolerance_px;
+      converged = error_norm <= tolerance_px;
     }
     result.iterations = it;
     if (!converged) {
       result.status = UnprojectStatus::NotConverged;
       return result;
     }
-    if (!inside_invertible_region(n)) {
-      result.status = UnprojectStatus::BeyondFold;
-      return result;
-    }
-    result.dpixel_dnormalized = j;
+    return converged_result(n, j, it);
   }
+  return converged_result(n, result.dpixel_dnormalized, 0);
+}
+
+UnprojectResult CameraModel::converged_result(const Eigen::Vector2d& n, const Eigen::Matrix2d& j,
+                                              int iterations) const {
+  UnprojectResult result;
+  result.iterations = iterations;
+  if (!inside_invertible_region(n)) {
+    result.status = UnprojectStatus::BeyondFold;
+    return result;
+  }
+  result.dpixel_dnormalized = j;
   result.status = UnprojectStatus::Ok;
   result.normalized = n;
   result.ray_camera = Eigen::Vector3d(n.x(), n.y(), 1.0).normalized();
   return result;
+}
+
+void CameraModel::unproject_batch(const Eigen::Vector2d* pixels, int count, UnprojectResult* out,
+                                  double tolerance_px) const {
+  for (int first = 0; first < count; first += kUnprojectBatch) {
+    const int lanes = std::min(kUnprojectBatch, count - first);
+    const Eigen::Vector2d* pixel = pixels + first;
+    // Each lane runs unproject's own arithmetic while every full Newton step
+    // lowers its residual (the common path); a lane that leaves that path
+    // (a halved step, a singular Jacobian, a non-finite pixel) is handed to
+    // unproject whole, which retraces the same steps: results equal to the bit.
+    Eigen::Vector2d n[kUnprojectBatch], error[kUnprojectBatch];
+    Eigen::Matrix2d j[kUnprojectBatch];
+    double error_norm[kUnprojectBatch];
+    int iterations[kUnprojectBatch];
+    bool active[kUnprojectBatch], fallback[kUnprojectBatch];
+    const bool pinhole = lens_model_ == LensModel::Pinhole;
+    for (int l = 0; l < lanes; ++l) {
+      fallback[l] = pinhole || !pixel[l].allFinite();
+      active[l] = false;
+      if (fallback[l]) continue;
+      n[l] = Eigen::Vector2d((pixel[l].x() - cx_px()) / fx_px(), (pixel[l].y() - cy_px()) / fy_px());
+      error[l] = project_normalized_inline(n[l], &j[l]) - pixel[l];
+      error_norm[l] = error[l].norm();
+      iterations[l] = 0;
+      active[l] = !(error_norm[l] <= tolerance_px);
+    }
+    for (bool any = true; any;) {
+      any = false;
+      for (int l = 0; l < lanes; ++l) {
+        if (!active[l]) continue;
+        const double det = j[l].determinant();
+        if (iterations[l] >= kMaxUnprojectIterations || !(std::abs(det) > 0) || !std::isfinite(det)) {
+          fallback[l] = true;
+          active[l] = false;
+          continue;
+        }
+        const Eigen::Vector2d step = j[l].inverse() * error[l];
+        const double scale = 1.0;
+        const Eigen::Vector2d trial_n = n[l] - scale * step;
+        Eigen::Matrix2d trial_j;
+        const Eigen::Vector2d trial_error = project_normalized_inline(trial_n, &trial_j) - pixel[l];
+        const double trial_norm = trial_error.norm();
+        if (!(trial_error.allFinite() && trial_norm < error_norm[l])) {
+          fallback[l] = true;
+          active[l] = false;
+          continue;
+        }
+        n[l] = trial_n;
+        error[l] = trial_error;
+        error_norm[l] = trial_norm;
+        j[l] = trial_j;
+        ++iterations[l];
+        active[l] = !(error_norm[l] <= tolerance_px);
+        any = any || active[l];
+      }
+    }
+    for (int l = 0; l < lanes; ++l)
+      out[first + l] = fallback[l] ? unproject(pixel[l], tolerance_px) : converged_result(n[l], j[l], iterations[l]);
+  }
 }
 
 std::optional<CameraModel::FieldOfView> CameraModel::field_of_view() const {

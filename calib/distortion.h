@@ -35,28 +35,47 @@ void tilt_projection_matrix(const T& tau_x, const T& tau_y, T m[9]) {
 // Distorts normalised coordinates (x, y) into (xd, yd). `k` holds all 14
 // coefficients (unused ones zero); `tilt` is the tilt matrix or nullptr for none.
 // If `jacobian` is given it receives d(xd, yd)/d(x, y), row-major 2x2.
+// `rational` = false skips the denominator (k4 = k5 = k6 = 0) and `prism` =
+// false the thin-prism terms (s1..s4 = 0): for plain doubles whose coefficients
+// are zero the result is the same to the bit (a division by 1 and added zeros
+// skipped; only a zero's sign may differ), so a model skips what it does not
+// have. A Jet's zero coefficient still carries a derivative: keep both true.
 template <typename T>
-void distort(const T* k, const T* tilt, const T& x, const T& y, T* xd, T* yd, T* jacobian = nullptr) {
+void distort(const T* k, const T* tilt, const T& x, const T& y, T* xd, T* yd, T* jacobian = nullptr,
+             bool rational = true, bool prism = true) {
   const T r2 = x * x + y * y;
   const T r4 = r2 * r2;
   const T r6 = r4 * r2;
   const T numerator = T(1) + k[0] * r2 + k[1] * r4 + k[4] * r6;
-  const T inv_denominator = T(1) / (T(1) + k[5] * r2 + k[6] * r4 + k[7] * r6);
-  const T radial = numerator * inv_denominator;
-  const T x0 = x * radial + T(2) * k[2] * x * y + k[3] * (r2 + T(2) * x * x) + k[8] * r2 + k[9] * r4;
-  const T y0 = y * radial + k[2] * (r2 + T(2) * y * y) + T(2) * k[3] * x * y + k[10] * r2 + k[11] * r4;
+  const T inv_denominator = rational ? T(1) / (T(1) + k[5] * r2 + k[6] * r4 + k[7] * r6) : T(1);
+  const T radial = rational ? numerator * inv_denominator : numerator;
+  T x0 = x * radial + T(2) * k[2] * x * y + k[3] * (r2 + T(2) * x * x);
+  T y0 = y * radial + k[2] * (r2 + T(2) * y * y) + T(2) * k[3] * x * y;
+  if (prism) {  // added in the order of the one formula: left to right
+    x0 = x0 + k[8] * r2 + k[9] * r4;
+    y0 = y0 + k[10] * r2 + k[11] * r4;
+  }
 
   T jx0[4];  // d(x0, y0)/d(x, y)
   if (jacobian) {
     const T d_num = k[0] + T(2) * k[1] * r2 + T(3) * k[4] * r4;
-    const T d_den = k[5] + T(2) * k[6] * r2 + T(3) * k[7] * r4;
-    const T d_radial = (d_num - radial * d_den) * inv_denominator;  // d radial / d r^2
-    const T prism_x = k[8] + T(2) * k[9] * r2;                      // d(s1 r^2 + s2 r^4)/d r^2
-    const T prism_y = k[10] + T(2) * k[11] * r2;
-    jx0[0] = radial + T(2) * x * x * d_radial + T(2) * k[2] * y + T(6) * k[3] * x + T(2) * x * prism_x;
-    jx0[1] = T(2) * x * y * d_radial + T(2) * k[2] * x + T(2) * k[3] * y + T(2) * y * prism_x;
-    jx0[2] = T(2) * x * y * d_radial + T(2) * k[2] * x + T(2) * k[3] * y + T(2) * x * prism_y;
-    jx0[3] = radial + T(2) * y * y * d_radial + T(6) * k[2] * y + T(2) * k[3] * x + T(2) * y * prism_y;
+    T d_radial = d_num;  // d radial / d r^2
+    if (rational) {
+      const T d_den = k[5] + T(2) * k[6] * r2 + T(3) * k[7] * r4;
+      d_radial = (d_num - radial * d_den) * inv_denominator;
+    }
+    jx0[0] = radial + T(2) * x * x * d_radial + T(2) * k[2] * y + T(6) * k[3] * x;
+    jx0[1] = T(2) * x * y * d_radial + T(2) * k[2] * x + T(2) * k[3] * y;
+    jx0[2] = T(2) * x * y * d_radial + T(2) * k[2] * x + T(2) * k[3] * y;
+    jx0[3] = radial + T(2) * y * y * d_radial + T(6) * k[2] * y + T(2) * k[3] * x;
+    if (prism) {
+      const T prism_x = k[8] + T(2) * k[9] * r2;  // d(s1 r^2 + s2 r^4)/d r^2
+      const T prism_y = k[10] + T(2) * k[11] * r2;
+      jx0[0] = jx0[0] + T(2) * x * prism_x;
+      jx0[1] = jx0[1] + T(2) * y * prism_x;
+      jx0[2] = jx0[2] + T(2) * x * prism_y;
+      jx0[3] = jx0[3] + T(2) * y * prism_y;
+    }
   }
   if (tilt == nullptr) {
     *xd = x0;

@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "render/parallel_rows.h"
+#include "render/row_camera_rays.h"
 #include "render/trace_scene_builder.h"
 
 namespace glasspiv {
@@ -46,12 +47,12 @@ std::vector<float> render_setup(const TraceScene& scene, const SceneIndex& index
       [&](int row) {
         thread_local TraceResult r;
         SetupRenderStats& st = row_stats[static_cast<std::size_t>(row)];
+        RowCameraRays rays(camera, camera_from_world, row, k);
         for (int col = 0; col < width; ++col) {
           double sum = 0;
           for (int sy = 0; sy < k; ++sy) {
             for (int sx = 0; sx < k; ++sx) {
-              const Eigen::Vector2d pixel(col + (sx + 0.5) / k - 0.5, row + (sy + 0.5) / k - 0.5);
-              const std::optional<CameraRay> ray = pixel_camera_ray(camera, camera_from_world, pixel);
+              const std::optional<CameraRay>& ray = rays.next();
               if (!ray) {
                 ++st.unproject_failures;
                 continue;

@@ -1,5 +1,6 @@
 #include "render/trace_scene_builder.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -115,9 +116,10 @@ std::optional<WorldRay> pixel_world_ray(const CameraModel& model, const RigidTra
   return r;
 }
 
-std::optional<CameraRay> pixel_camera_ray(const CameraModel& model, const RigidTransform& camera_from_world,
-                                          const Eigen::Vector2d& pixel) {
-  const UnprojectResult u = model.unproject(pixel);
+namespace {
+
+// The camera ray of an unprojected pixel, with its differentials.
+std::optional<CameraRay> camera_ray_of(const UnprojectResult& u, const RigidTransform& camera_from_world) {
   if (!u.ok()) return std::nullopt;
   const Eigen::Matrix2d& dpixel_dnormalized = u.dpixel_dnormalized;
   const double det = dpixel_dnormalized.determinant();
@@ -130,6 +132,24 @@ std::optional<CameraRay> pixel_camera_ray(const CameraModel& model, const RigidT
   r.direction = world_from_camera * Eigen::Vector3d(u.normalized.x(), u.normalized.y(), 1.0);
   r.ddirection_dpixel = world_from_camera * dray_dpixel;
   return r;
+}
+
+}  // namespace
+
+std::optional<CameraRay> pixel_camera_ray(const CameraModel& model, const RigidTransform& camera_from_world,
+                                          const Eigen::Vector2d& pixel) {
+  return camera_ray_of(model.unproject(pixel), camera_from_world);
+}
+
+void pixel_camera_rays(const CameraModel& model, const RigidTransform& camera_from_world,
+                       const std::vector<Eigen::Vector2d>& pixels, std::vector<std::optional<CameraRay>>* rays) {
+  rays->resize(pixels.size());
+  UnprojectResult u[CameraModel::kUnprojectBatch];
+  for (std::size_t first = 0; first < pixels.size(); first += CameraModel::kUnprojectBatch) {
+    const int count = static_cast<int>(std::min<std::size_t>(CameraModel::kUnprojectBatch, pixels.size() - first));
+    model.unproject_batch(pixels.data() + first, count, u);
+    for (int i = 0; i < count; ++i) (*rays)[first + static_cast<std::size_t>(i)] = camera_ray_of(u[i], camera_from_world);
+  }
 }
 
 std::optional<WorldRay> pixel_world_ray(const Scene& scene, int camera_index, const Eigen::Vector2d& pixel) {

@@ -56,6 +56,10 @@ std::optional<WorldRay> pixel_world_ray(const CameraModel& model, const RigidTra
 // (x, y, 1) in the camera frame, rotated to the world). std::nullopt as above.
 std::optional<CameraRay> pixel_camera_ray(const CameraModel& model, const RigidTransform& camera_from_world,
                                           const Eigen::Vector2d& pixel);
+// pixel_camera_ray for each of `pixels`, equal to it to the bit, with the
+// unprojections interleaved (CameraModel::unproject_batch): about 1.5x faster.
+void pixel_camera_rays(const CameraModel& model, const RigidTransform& camera_from_world,
+                       const std::vector<Eigen::Vector2d>& pixels, std::vector<std::optional<CameraRay>>* rays);
 
 // The same for a scene camera (index into scene.cameras; throws
 // std::out_of_range for a bad index).

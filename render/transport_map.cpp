@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "render/parallel_rows.h"
+#include "render/row_camera_rays.h"
 #include "render/trace_scene_builder.h"
 
 namespace glasspiv {
@@ -63,14 +64,14 @@ void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraMod
   out->counts.assign(static_cast<std::size_t>(width), 0);
   out->background.assign(static_cast<std::size_t>(width), 0.0f);
   out->opaque.assign(static_cast<std::size_t>(width), 0.0f);
+  RowCameraRays rays(camera, camera_from_world, row, k);
   for (int col = 0; col < width; ++col) {
     bool any_hit = false;
     double background = 0, opaque = 0;
     std::uint32_t count = 0;
     for (int sy = 0; sy < k; ++sy) {
       for (int sx = 0; sx < k; ++sx) {
-        const Eigen::Vector2d pixel(col + (sx + 0.5) / k - 0.5, row + (sy + 0.5) / k - 0.5);
-        const std::optional<CameraRay> ray = pixel_camera_ray(camera, camera_from_world, pixel);
+        const std::optional<CameraRay>& ray = rays.next();
         if (!ray) {
           ++out->unproject_failures;
           continue;

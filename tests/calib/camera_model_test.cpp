@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <random>
@@ -382,6 +383,44 @@ TEST(CameraModel, UnprojectRoundTripOverWholeImage) {
     EXPECT_EQ(rt.not_ok, 0) << lens.name;
     EXPECT_LT(rt.max_error_px, 1e-6) << lens.name;
   }
+}
+
+// 4a'. unproject_batch is unproject, pixel by pixel, to the bit: over every
+// round-trip lens and random models of every length, out to far beyond the
+// image (where Newton halves its steps, folds and fails), with non-finite
+// pixels and counts that are not a multiple of the batch.
+TEST(CameraModel, UnprojectBatchEqualsUnprojectToTheBit) {
+  std::mt19937 rng(41);
+  std::vector<CameraModel> models;
+  for (const NamedLens& lens : round_trip_lenses()) models.push_back(lens.model);
+  for (int count : {0, 4, 5, 8, 12, 14})
+    for (int trial = 0; trial < 3; ++trial) models.push_back(random_camera(count, rng));
+  models.emplace_back(1920, 1080, 1000, 1000, 959.5, 539.5, std::vector<double>{-0.5, 0, 0, 0, 0});  // folds
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  long compared = 0, halved_or_failed = 0;
+  for (const CameraModel& m : models) {
+    std::vector<Eigen::Vector2d> pixels = image_grid(m.width_px(), m.height_px(), 23, 17);
+    for (double f : {-3.0, -1.0, 2.0, 4.0})  // well outside the image
+      pixels.emplace_back(f * m.width_px(), 0.5 * m.height_px()), pixels.emplace_back(0.5 * m.width_px(), f * m.height_px());
+    pixels.insert(pixels.begin() + 3, {Eigen::Vector2d(nan, 1), Eigen::Vector2d(1, inf)});
+    pixels.pop_back();  // an odd count
+    std::vector<UnprojectResult> batch(pixels.size());
+    m.unproject_batch(pixels.data(), static_cast<int>(pixels.size()), batch.data());
+    for (std::size_t i = 0; i < pixels.size(); ++i) {
+      const UnprojectResult one = m.unproject(pixels[i]);
+      const UnprojectResult& b = batch[i];
+      ASSERT_EQ(b.status, one.status) << i;
+      ASSERT_EQ(b.iterations, one.iterations) << i;
+      for (int k = 0; k < 2; ++k) ASSERT_EQ(std::memcmp(&b.normalized[k], &one.normalized[k], sizeof(double)), 0);
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(std::memcmp(&b.ray_camera[k], &one.ray_camera[k], sizeof(double)), 0);
+      for (int k = 0; k < 4; ++k)
+        ASSERT_EQ(std::memcmp(&b.dpixel_dnormalized(k), &one.dpixel_dnormalized(k), sizeof(double)), 0);
+      ++compared;
+      if (!one.ok()) ++halved_or_failed;
+    }
+  }
+  EXPECT_GT(halved_or_failed, 10);  // the paths that leave the common one were taken
+  std::printf("unproject_batch = unproject on %ld pixels (%ld not ok)\n", compared, halved_or_failed);
 }
 
 // 4b. cv::undistortPoints with its default criteria (5 fixed-point iterations)
