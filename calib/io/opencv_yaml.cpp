@@ -22,9 +22,10 @@ namespace {
 
 // yaml-cpp's parser recurses once per level of nesting, so a file nested deep
 // enough overflows the stack (SIGSEGV): measure the depth on the text first.
-// The measure never undercounts: every indentation step, "- " entry and '[' /
-// '{' adds a level (also in comments and strings, which only overcounts), and
-// a ']' / '}' ends one only outside comments and quotes.
+// Every indentation step, "- " entry and '[' / '{' adds a level (also in
+// comments and strings, which only overcounts), and a ']' / '}' ends one only
+// outside comments and quotes on its line; quoted text spanning lines can hide
+// a level, which yaml-cpp's own depth guard (2000 levels) then refuses.
 void check_nesting_depth(std::string_view text, const std::string& path) {
   std::vector<std::size_t> indents;  // columns of the open block levels
   int flow = 0;
@@ -81,18 +82,30 @@ YAML::Node load_one_mapping(std::string_view contents, const YamlFields& fields)
   if (yaml.compare(0, 3, "\xEF\xBB\xBF") == 0) yaml.erase(0, 3);
   const std::size_t first = yaml.find_first_not_of(" \t\r\n");
   if (first != std::string::npos && yaml.compare(first, 6, "%YAML:") == 0) yaml[first] = '#';
-  bool content = false;
+  // "---" starts a document (text may follow it on its line), "..." ends one.
+  bool content = false, ended = false;
   int line = 0;
+  const auto text_from = [](std::string_view l, std::size_t from) {
+    const std::size_t at = l.find_first_not_of(" \t\r", std::min(from, l.size()));
+    return at != std::string_view::npos && l[at] != '#';
+  };
+  const auto is_marker = [](std::string_view l, const char* m) {
+    return l.rfind(m, 0) == 0 && (l.size() == 3 || l[3] == ' ' || l[3] == '\t' || l[3] == '\r');
+  };
   for (std::size_t pos = 0; pos < yaml.size(); ++line) {
     const std::size_t eol = std::min(yaml.find('\n', pos), yaml.size());
     const std::string_view l(yaml.data() + pos, eol - pos);
-    const bool marker = l.rfind("---", 0) == 0 || l.rfind("...", 0) == 0;
-    if (marker && content)
+    pos = eol + 1;
+    if (is_marker(l, "...")) {
+      ended = ended || content;
+      continue;
+    }
+    const bool start = is_marker(l, "---");
+    const bool has_text = text_from(l, start ? 3 : 0);
+    if ((start && (content || ended)) || (has_text && ended))
       throw InputError(fields.path(), "",
                        fmt::format("line {}: a second YAML document; a camera file holds one", line + 1));
-    const std::size_t indent = l.find_first_not_of(" \t\r");
-    if (!marker && indent != std::string_view::npos && l[indent] != '#') content = true;
-    pos = eol + 1;
+    content = content || has_text;
   }
   return fields.load_mapping(yaml, "OpenCV FileStorage fields (camera_matrix, ...)");
 }
@@ -107,31 +120,52 @@ class UniqueKeys {
  public:
   UniqueKeys(const YamlFields& fields, std::size_t text_size) : fields_(fields), budget_(text_size + 16) {}
 
-  void check(const YAML::Node& node, const std::string& field, int depth = 0) {
+  void check(const YAML::Node& node) { check(node, nullptr, 0); }
+
+ private:
+  // A node's field name ("a.b[2]"), spelled out only for an error: building it
+  // for every node costs the key's length each time (a megabyte key over a
+  // long list is hours).
+  struct Path {
+    const Path* parent;
+    const std::string* key;  // a mapping's key, or nullptr for a list's index
+    std::size_t index;
+    static std::string text(const Path* p) {
+      if (p == nullptr) return "";
+      std::string prefix = text(p->parent);
+      if (p->key == nullptr) return fmt::format("{}[{}]", prefix, p->index);
+      return prefix.empty() ? *p->key : prefix + "." + *p->key;
+    }
+  };
+
+  void check(const YAML::Node& node, const Path* path, int depth) {
     if (depth > kMaxOpenCVNestingDepth)
-      fields_.fail(field, node,
+      fields_.fail(Path::text(path), node,
                    fmt::format("nested more than {} levels deep through YAML aliases; glasspiv reads OpenCV "
                                "FileStorage files nested at most {} levels",
                                kMaxOpenCVNestingDepth, kMaxOpenCVNestingDepth));
     if (budget_-- == 0)
-      fields_.fail(field, node, "holds more values than its text spells out (YAML aliases repeat them); OpenCV "
-                                "FileStorage files have no aliases");
+      fields_.fail(Path::text(path), node,
+                   "holds more values than its text spells out (YAML aliases repeat them); OpenCV FileStorage "
+                   "files have no aliases");
     if (node.IsMap()) {
       std::set<std::string> keys;
       for (auto it = node.begin(); it != node.end(); ++it) {
-        if (!it->first.IsScalar()) fields_.fail(field, it->first, "has a key that is not a text");
+        if (!it->first.IsScalar()) fields_.fail(Path::text(path), it->first, "has a key that is not a text");
         const std::string& key = it->first.Scalar();
-        const std::string name = field.empty() ? key : field + "." + key;
+        const Path child{path, &key, 0};
         if (!keys.insert(key).second)
-          fields_.fail(name, it->first, "appears twice (the key '" + key + "' is given more than once)");
-        check(it->second, name, depth + 1);
+          fields_.fail(Path::text(&child), it->first, "appears twice (the key '" + key + "' is given more than once)");
+        check(it->second, &child, depth + 1);
       }
     } else if (node.IsSequence()) {
-      for (std::size_t i = 0; i < node.size(); ++i) check(node[i], fmt::format("{}[{}]", field, i), depth + 1);
+      for (std::size_t i = 0; i < node.size(); ++i) {
+        const Path child{path, nullptr, i};
+        check(node[i], &child, depth + 1);
+      }
     }
   }
 
- private:
   const YamlFields& fields_;
   std::size_t budget_;
 };
@@ -236,7 +270,7 @@ std::vector<Camera> parse(std::string_view contents, const std::string& path) {
   check_nesting_depth(contents, path);
   const Reader r(path);
   const YAML::Node root = load_one_mapping(contents, r);
-  UniqueKeys(r, contents.size()).check(root, "");
+  UniqueKeys(r, contents.size()).check(root);
   auto node = [&](const char* key) { return root[key]; };
 
   std::string name = camera_file_detail::default_camera_name(path);
@@ -316,7 +350,9 @@ std::string format_opencv_yaml(const std::vector<Camera>& cameras, const std::st
   try {
     cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
     fs.writeComment("glasspiv camera (docs/formats.md); rvec/tvec, if present, are camera_from_world, tvec in mm");
-    if (!camera.name.empty()) fs << "camera_name" << camera.name;
+    // write(), not <<: FileStorage's << takes a text that starts with a
+    // bracket or a brace for the start or end of a structure (a name "}" crashes it).
+    if (!camera.name.empty()) fs.write("camera_name", camera.name);
     fs << "image_width" << m.width_px() << "image_height" << m.height_px();
     cv::Mat k(3, 3, CV_64F);
     const Eigen::Matrix3d km = m.camera_matrix();
@@ -335,12 +371,19 @@ std::string format_opencv_yaml(const std::vector<Camera>& cameras, const std::st
       fs << "tvec" << (cv::Mat_<double>(3, 1) << t.x(), t.y(), t.z());
     }
     std::string text = fs.releaseAndGetString();
-    // FileStorage leaves some texts unquoted ("[x]") that then read back as
-    // something else: refuse those names rather than write a file that fails.
+    // FileStorage leaves some texts unquoted ("[x]", "null") that then read
+    // back as something else, in OpenCV or in glasspiv's reader: refuse those
+    // names rather than write a file that fails.
     if (!camera.name.empty()) {
       cv::FileStorage check(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
       const cv::FileNode n = check["camera_name"];
-      if (!n.isString() || n.string() != camera.name)
+      bool same = n.isString() && n.string() == camera.name;
+      try {
+        same = same && parse(text, path).front().name == camera.name;
+      } catch (const InputError&) {
+        same = false;
+      }
+      if (!same)
         throw InputError(path, "camera_name",
                          "OpenCV FileStorage cannot store the camera name '" + camera.name + "'; rename the camera");
     }

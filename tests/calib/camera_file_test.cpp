@@ -176,6 +176,27 @@ TEST(CameraFileRoundTrip, GlasspivYamlKeepsOddNames) {
   }
 }
 
+// OpenCV's writer takes a text starting with a bracket or brace for a
+// structure and leaves some texts unquoted: every name either reads back as
+// itself (through glasspiv's reader and OpenCV's) or is refused by name.
+TEST(CameraFileRoundTrip, OpenCVNamesReadBackOrAreRefused) {
+  std::mt19937 rng(18);
+  int refused = 0;
+  for (const std::string name : {"}", "}a", "]", "{", "[x]", "null", "Null", "~", "true", "2", "cam 0: left",
+                                 "quote\"back\\slash", "tab\there", "-x", "# not a comment", "kamera_\xc3\xbc"}) {
+    SCOPED_TRACE(name);
+    const Camera camera = random_camera(rng, LensModel::OpenCV5, false, false, name);
+    try {
+      const std::string text = format_cameras({camera}, CameraFileFormat::OpenCV, "odd.yaml");
+      EXPECT_EQ(parse_cameras(text, CameraFileFormat::OpenCV, "odd.yaml")[0].name, name) << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("cannot store the camera name"), std::string::npos) << e.what();
+      ++refused;
+    }
+  }
+  EXPECT_GE(refused, 2);  // at least "[x]" and "null"
+}
+
 TEST(CameraFileRoundTrip, OpenCVYamlIsExactForEveryLensModel) {
   std::mt19937 rng(12);
   for (LensModel model : kAllModels) {
@@ -784,6 +805,9 @@ std::vector<BadInput> bad_inputs() {
          for (int i = 0; i < 200; ++i) t += std::string(static_cast<std::size_t>(i), ' ') + "k:\n";
          return t + std::string(200, ' ') + "k: 1\n";
        }(), {"nested more than 64 levels"}},
+      {"a second document after an end marker", F::OpenCV, o + "...\nimage_width: 3\n", {"second YAML document"}},
+      {"two documents on their marker lines", F::OpenCV, "--- {image_width: 640}\n--- {image_height: 480}\n",
+       {"line 2", "second YAML document"}},
       {"billion laughs", F::OpenCV, [&] {
          std::string t = o + "l0: &l0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n";
          for (int i = 1; i < 12; ++i) {
@@ -949,6 +973,8 @@ TEST(CameraFileRejections, InputsAtTheLimitsParse) {
   nested = std::string(kGoodOpenCV) + "x: " + std::string(64, '[') + std::string(64, ']') + "\n";
   EXPECT_THROW(parse_cameras(nested, CameraFileFormat::OpenCV, "o.yaml"), InputError);
   // Brackets in a quoted text count as nesting but a few do no harm.
+  // A document's end marker with nothing after it is a whole file.
+  EXPECT_NO_THROW(parse_cameras(std::string(kGoodOpenCV) + "...\n", CameraFileFormat::OpenCV, "end.yaml"));
   EXPECT_NO_THROW(parse_cameras(std::string(kGoodOpenCV) + "camera_name: \"cam]]]]\"\n", CameraFileFormat::OpenCV,
                                 "o.yaml"));
 }
