@@ -159,13 +159,13 @@ void bench_lens(const Lens& lens, long n) {
   print_row(lens, {"project", "mrcal_project (one call, no gradients)", t_mrcal, diff_mrcal, 0}, t_cv, n);
 
   // --- unprojection
+  const auto ray_of = [](const glasspiv::UnprojectResult& r) {
+    return r.ok() ? Eigen::Vector3d(r.normalized.x(), r.normalized.y(), 1.0)
+                  : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  };
   std::vector<Eigen::Vector3d> rays(n);
   const double t_unproject = best_of_3_seconds([&] {
-    for (long i = 0; i < n; ++i) {
-      const glasspiv::UnprojectResult r = m.unproject({pixels[i].x, pixels[i].y});
-      rays[i] = r.ok() ? Eigen::Vector3d(r.normalized.x(), r.normalized.y(), 1.0)
-                       : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
-    }
+    for (long i = 0; i < n; ++i) rays[i] = ray_of(m.unproject({pixels[i].x, pixels[i].y}));
   });
   long failures_ours = 0;
   const double error_ours = round_trip_error(m, pixels, rays, &failures_ours);
@@ -176,9 +176,7 @@ void bench_lens(const Lens& lens, long n) {
   const double t_unproject_batch = best_of_3_seconds(
       [&] { m.unproject_batch(pixels_eigen.data(), static_cast<int>(n), batch.data()); });
   std::vector<Eigen::Vector3d> batch_rays(n);
-  for (long i = 0; i < n; ++i)
-    batch_rays[i] = batch[i].ok() ? Eigen::Vector3d(batch[i].normalized.x(), batch[i].normalized.y(), 1.0)
-                                  : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  for (long i = 0; i < n; ++i) batch_rays[i] = ray_of(batch[i]);
   long failures_batch = 0;
   const double error_batch = round_trip_error(m, pixels, batch_rays, &failures_batch);
 

@@ -218,8 +218,7 @@ UnprojectResult CameraModel::unproject(const Eigen::Vector2d& pixel, double tole
     result.status = UnprojectStatus::NonFinite;
     return result;
   }
-  const Eigen::Vector2d target((pixel.x() - cx_px()) / fx_px(), (pixel.y() - cy_px()) / fy_px());
-  Eigen::Vector2d n = target;  // the undistorted guess is close for realistic lenses
+  Eigen::Vector2d n = undistorted_guess(pixel);
   result.dpixel_dnormalized = Eigen::Vector2d(fx_px(), fy_px()).asDiagonal();
   if (lens_model_ != LensModel::Pinhole) {
     Eigen::Matrix2d j;
@@ -264,6 +263,10 @@ UnprojectResult CameraModel::unproject(const Eigen::Vector2d& pixel, double tole
   return converged_result(n, result.dpixel_dnormalized, 0);
 }
 
+Eigen::Vector2d CameraModel::undistorted_guess(const Eigen::Vector2d& pixel) const {
+  return {(pixel.x() - cx_px()) / fx_px(), (pixel.y() - cy_px()) / fy_px()};
+}
+
 UnprojectResult CameraModel::converged_result(const Eigen::Vector2d& n, const Eigen::Matrix2d& j,
                                               int iterations) const {
   UnprojectResult result;
@@ -298,7 +301,7 @@ void CameraModel::unproject_batch(const Eigen::Vector2d* pixels, int count, Unpr
       fallback[l] = pinhole || !pixel[l].allFinite();
       active[l] = false;
       if (fallback[l]) continue;
-      n[l] = Eigen::Vector2d((pixel[l].x() - cx_px()) / fx_px(), (pixel[l].y() - cy_px()) / fy_px());
+      n[l] = undistorted_guess(pixel[l]);
       error[l] = project_normalized_inline(n[l], &j[l]) - pixel[l];
       error_norm[l] = error[l].norm();
       iterations[l] = 0;

@@ -9,9 +9,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include "calib/io/camera_file.h"
+#include "calib/io/camera_yaml_fields.h"
 #include "util/input_error.h"
 #include "util/text_number.h"
-#include "util/yaml_fields.h"
 
 namespace glasspiv {
 namespace {
@@ -30,19 +30,7 @@ std::string known_fields() {
   return list;
 }
 
-class Reader : public YamlFields {
- public:
-  using YamlFields::YamlFields;
-
-  int image_side(const YAML::Node& node, const std::string& field) const {
-    const double value = real(node, field);
-    try {
-      return checked_image_side_px(value, field);
-    } catch (const InputError& e) {
-      fail(field, node, e.problem());
-    }
-  }
-};
+using Reader = CameraYamlFields;
 
 std::vector<Camera> parse(std::string_view contents, const std::string& path) {
   const Reader r(path);

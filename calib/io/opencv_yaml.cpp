@@ -13,9 +13,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include "calib/io/camera_file.h"
+#include "calib/io/camera_yaml_fields.h"
 #include "util/input_error.h"
 #include "util/text_number.h"
-#include "util/yaml_fields.h"
 
 namespace glasspiv {
 namespace {
@@ -197,19 +197,14 @@ struct Matrix {
   double at(int r, int c) const { return values[static_cast<std::size_t>(r) * cols + c]; }
 };
 
-class Reader : public YamlFields {
+class Reader : public CameraYamlFields {
  public:
-  using YamlFields::YamlFields;
+  using CameraYamlFields::CameraYamlFields;
 
-  int image_side(const YAML::Node& node, const std::string& field) const {
+  int required_image_side(const YAML::Node& node, const std::string& field) const {
     if (!node.IsDefined())
       throw InputError(path(), field, "missing (required: glasspiv needs the image size to build a camera model)");
-    const double value = real(node, field);
-    try {
-      return checked_image_side_px(value, field);
-    } catch (const InputError& e) {
-      fail(field, node, e.problem());
-    }
+    return image_side(node, field);
   }
 
   // An !!opencv-matrix, or a plain list of numbers (read as one row).
@@ -276,8 +271,8 @@ std::vector<Camera> parse(std::string_view contents, const std::string& path) {
   std::string name = camera_file_detail::default_camera_name(path);
   if (const YAML::Node n = node("camera_name"); n.IsDefined()) name = r.text(n, "camera_name");
 
-  const int width = r.image_side(node("image_width"), "image_width");
-  const int height = r.image_side(node("image_height"), "image_height");
+  const int width = r.required_image_side(node("image_width"), "image_width");
+  const int height = r.required_image_side(node("image_height"), "image_height");
   camera_file_detail::checked_image_size(width, height, path, "image_width");
 
   const YAML::Node k_node = node("camera_matrix");
