@@ -30,6 +30,8 @@ struct RenderOptions {
   bool setup = false, no_reflections = false;
   double background = -1, texture_mm_per_px = 0, pattern_mm = 10, particle_density = 2, particle_diameter_mm = 0.2, gain = 1;
   double min_weight = TraceOptions{}.min_weight, min_weight_reflected = TraceOptions{}.min_weight_reflected;
+  int reflection_grid = TraceOptions{}.reflection_grid;
+  double reflection_grid_tolerance = TraceOptions{}.reflection_grid_tolerance;
   int max_depth = TraceOptions{}.max_depth, samples = 0, threads = 0, binning = 1;
   std::uint64_t seed = 1;
 };
@@ -131,6 +133,8 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
   TraceOptions options;
   options.min_weight = o.min_weight;
   options.min_weight_reflected = o.min_weight_reflected;
+  options.reflection_grid = o.reflection_grid;
+  options.reflection_grid_tolerance = o.reflection_grid_tolerance;
   options.max_depth = o.max_depth;
   options.reflections = !o.no_reflections;
   const Camera& camera = ps.camera();
@@ -182,6 +186,9 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
                   "%ld reflections not spawned; weight not followed %.3g of a pixel on average\n",
                   st.closed_form_rays, st.branches_cut_by_weight, st.branches_cut_by_depth, st.reflections_skipped,
                   st.cut_weight / map.pixel_count());
+      if (options.reflections && options.reflection_grid > 1)
+        std::printf("reflection grid %d: %ld reflected subtrees interpolated between anchors, not traced\n",
+                    options.reflection_grid, st.subtrees_interpolated);
       if (cached.written)
         std::printf("wrote the transport map %s (%.1f MiB, fingerprint %s)\n", map_path.c_str(),
                     map.memory_bytes() / 1048576.0, fingerprint_hex(cached.fingerprint).c_str());
@@ -243,6 +250,16 @@ void register_render_command(CLI::App& app) {
   r->add_option("--min-weight-reflected", o->min_weight_reflected,
                 "Branches reflected at least once are cut below this instead, where it is higher than --min-weight "
                 "(cheaper ghosts; bench/RESULTS.md tables the error)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  r->add_option("--reflection-grid", o->reflection_grid,
+                "Trace reflected subtrees on every Nth sample of each axis only and interpolate those that agree "
+                "between them (1: trace every sample whole; bench/RESULTS.md tables the error)")
+      ->check(CLI::Range(1, 16))
+      ->capture_default_str();
+  r->add_option("--reflection-grid-tolerance", o->reflection_grid_tolerance,
+                "How closely a subtree must agree to be interpolated: a fraction of a pixel's footprint on the sheet "
+                "and of each weight")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   r->add_option("--max-depth", o->max_depth, "Most interface events on one path")

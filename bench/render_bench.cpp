@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <algorithm>
 #include <string>
 #include <thread>
 #include <vector>
@@ -38,6 +39,58 @@ double rms_difference(const std::vector<float>& a, const std::vector<float>& b) 
 // Forward render with one point sample per crossing (no footprint filter), for comparison.
 std::vector<float> point_sampled(const TransportMap& map, const SheetTexture& tex) {
   return forward_render_values(map, [&](double s, double t) { return tex.at(s, t); });
+}
+
+// The reflection grid (TraceOptions::reflection_grid) against the same
+// samples traced whole: run time, segments, and the error it adds to the
+// rendered checkerboard (footprint filter); against `reference` too if given.
+void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransform& pose, const SheetTexture& tex,
+                int threads, const std::vector<float>* reference) {
+  std::printf("\nreflection grid, %dx%d camera, reflections on, min_weight 1e-2; errors of the rendered 5 mm "
+              "checkerboard (0/1, footprint filter) against the same samples/axis traced whole%s:\n",
+              cam.width_px(), cam.height_px(), reference ? " and against the reference above" : "");
+  std::printf("| samples/axis | grid | tolerance | s per MP | branches/ray | subtrees interpolated/ray | "
+              "RMS vs traced whole | largest vs traced whole | light on the sheet vs traced whole |%s\n",
+              reference ? " RMS error |" : "");
+  std::printf("|---|---|---|---|---|---|---|---|---|%s\n", reference ? "---|" : "");
+  const double mp = cam.width_px() * double(cam.height_px()) / 1e6;
+  for (int k : reference ? std::vector<int>{1, 2} : std::vector<int>{1}) {
+    TransportMap whole;
+    std::vector<float> whole_image;
+    double whole_light = 0;
+    struct GridRow {
+      int grid;
+      double tolerance;
+    };
+    for (const GridRow& g : {GridRow{1, 0}, GridRow{2, 0.05}, GridRow{2, 0.1}, GridRow{2, 0.25}, GridRow{4, 0.1}}) {
+      TraceOptions options;
+      options.reflection_grid = g.grid;
+      if (g.grid > 1) options.reflection_grid_tolerance = g.tolerance;
+      const Stopwatch clock;
+      TransportMap map = build_transport_map(ts, cam, pose, options, k, threads);
+      const double seconds = clock.seconds();
+      const std::vector<float> image = forward_render_values(map, tex);
+      double light = 0;
+      for (float w : map.weight) light += w;
+      if (g.grid == 1) {
+        whole = std::move(map);
+        whole_image = image;
+        whole_light = light;
+      }
+      const TransportMap& m = g.grid == 1 ? whole : map;
+      double largest = 0;
+      for (std::size_t i = 0; i < image.size(); ++i)
+        largest = std::max(largest, std::abs(double(image[i]) - whole_image[i]));
+      char tolerance[16] = "";
+      if (g.grid > 1) std::snprintf(tolerance, sizeof tolerance, "%g", g.tolerance);
+      std::printf("| %d | %d | %s | %.3f | %.2f | %.2f | %.2e | %.4f | %.5f |", k, g.grid, tolerance, seconds / mp,
+                  double(m.stats.branches_traced) / m.stats.camera_rays,
+                  double(m.stats.subtrees_interpolated) / m.stats.camera_rays, rms_difference(image, whole_image),
+                  largest, light / whole_light);
+      if (reference) std::printf(" %.4f |", rms_difference(image, *reference));
+      std::printf("\n");
+    }
+  }
 }
 
 }  // namespace
@@ -73,17 +126,20 @@ int main(int argc, char** argv) {
     bool reflections;
     double min_weight;
     double min_weight_reflected = 0;
+    int reflection_grid = 1;
   };
   std::printf("\n| setting | s per MP | camera rays/s | branches/ray | crossings/px | rays in closed form | map MiB |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   for (const Setting& s : {Setting{"refraction only, min_weight 1e-2", false, 1e-2},
                            Setting{"reflections, min_weight 1e-2", true, 1e-2},
                            Setting{"reflections, min_weight 1e-2, reflected 3e-2", true, 1e-2, 3e-2},
+                           Setting{"reflections, min_weight 1e-2, reflection grid 2", true, 1e-2, 0, 2},
                            Setting{"reflections, min_weight 1e-3", true, 1e-3}}) {
     TraceOptions options;
     options.reflections = s.reflections;
     options.min_weight = s.min_weight;
     options.min_weight_reflected = s.min_weight_reflected;
+    options.reflection_grid = s.reflection_grid;
     const Stopwatch clock;
     const TransportMap map = build_transport_map(ts, cam, pose, options, 1, threads);
     const double t = clock.seconds();
@@ -119,13 +175,16 @@ int main(int argc, char** argv) {
                 worst_um, i);
   }
 
+  // A 5 mm checkerboard on the sheet: what the error columns render.
+  const SheetPicture checker = checkerboard_picture(ts.sheet.extent_s_mm, ts.sheet.extent_t_mm, 5.0);
+  const SheetTexture tex(checker.values.data(), checker.rows, checker.cols, checker.mm_per_texel);
+  grid_table(ts, cam, pose, tex, threads, nullptr);
+
   if (!table) return 0;
   // Run time versus error on a smaller camera: a 5 mm checkerboard on the sheet,
   // RMS difference of the rendered image to the reference (4 x 4 samples,
   // min_weight 1e-4, reflections on), with the footprint filter and without.
   const CameraModel tcam = square(camera.model, table_size);
-  const SheetPicture checker = checkerboard_picture(ts.sheet.extent_s_mm, ts.sheet.extent_t_mm, 5.0);
-  const SheetTexture tex(checker.values.data(), checker.rows, checker.cols, checker.mm_per_texel);
   struct Row {
     int k;
     double min_weight;
@@ -169,6 +228,10 @@ int main(int argc, char** argv) {
                 r.seconds / (tcam.width_px() * double(tcam.height_px()) / 1e6), r.crossings_per_px, r.rms_filtered,
                 r.rms_point);
   }
+  std::printf("peak RSS %.1f MiB\n", peak_rss_mib());
+
+  // The reflection grid at the table's size, against the reference too.
+  grid_table(ts, tcam, pose, tex, threads, &ref);
   std::printf("peak RSS %.1f MiB\n", peak_rss_mib());
 
   if (!picture.empty()) {

@@ -26,12 +26,25 @@ struct Branch {
   Eigen::Vector3d direction;  // unit
   Diff danchor, ddirection;   // ray differentials
   double weight;
+  std::uint64_t path;  // SheetCrossing::path
+  int subtree;         // SheetCrossing::subtree
   int depth;
   int medium;  // kFluid or the index of the solid the branch is in
   bool any_event;
   bool any_reflection;
   bool initial;
 };
+
+// The path of a branch that starts at an event on `solid` (refracted or
+// reflected there): one splitmix64 step over the parent's path.
+constexpr std::uint64_t kCameraPath = 0x243f6a8885a308d3ull;
+std::uint64_t extend_path(std::uint64_t path, int solid, bool reflected) {
+  std::uint64_t z = path ^ ((static_cast<std::uint64_t>(static_cast<std::uint32_t>(solid)) << 1 | (reflected ? 1 : 0)) +
+                            0x9e3779b97f4a7c15ull);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
 
 CrossingTag tag_of(const Branch& b) {
   if (!b.any_event) return CrossingTag::direct;
@@ -89,6 +102,8 @@ void record_crossing(const SheetPlane& sheet, const Eigen::Vector3d& n, const Br
   c.weight = b.weight;
   c.depth = b.depth;
   c.tag = tag_of(b);
+  c.path = b.path;
+  c.subtree = b.subtree;
   c.point_mm = x;
   c.direction = b.direction;
   const Diff dx = transfer(b, (x - b.anchor).dot(b.direction), n);
@@ -134,7 +149,7 @@ std::unique_ptr<SceneIndex> make_scene_index(const TraceScene& scene) {
 }
 
 void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay& ray, const TraceOptions& options,
-               TraceResult* result_out) {
+               TraceResult* result_out, DeferredSubtrees deferred) {
   const double dir_norm = ray.direction.norm();
   if (!ray.origin_mm.allFinite() || !ray.direction.allFinite() || !(dir_norm > 0))
     throw std::invalid_argument("trace_ray: origin and direction must be finite and the direction non-zero");
@@ -146,6 +161,9 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
   result.counts = TraceCounts{};
   result.background_weight = result.opaque_weight = result.absorbed_weight = 0;
   result.cut_by_weight_weight = result.cut_by_depth_weight = result.skipped_reflection_weight = 0;
+  result.subtrees.clear();
+  result.deferred.clear();
+  result.deferred_weight = 0;
 
   // The camera ray is not spawned from a hit, so it gets its own guard: a
   // surface closer than this to the origin is not seen (an origin on a surface
@@ -166,6 +184,8 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
   first.ddirection = (Eigen::Matrix3d::Identity() - first.direction * first.direction.transpose()) *
                      ray.ddirection_dpixel / dir_norm;
   first.weight = 1;
+  first.path = kCameraPath;
+  first.subtree = -1;
   first.depth = 0;
   first.medium = kFluid;
   first.any_event = first.any_reflection = false;
@@ -176,19 +196,25 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
   // the ones that are not. Decided before the child is built, so cut branches
   // cost no differentials.
   const double min_weight_reflected = std::max(options.min_weight, options.min_weight_reflected);
-  auto admit = [&](double weight, int depth, bool reflected) {
+  // subtree: the subtree the cut weight belongs to (-1: the refracted chain's).
+  auto admit = [&](double weight, int depth, bool reflected, int subtree) {
     if (!(weight > 0)) return false;  // nothing to follow (R = 0 or R = 1 exactly)
     if (depth > options.max_depth) {
       ++result.counts.cut_by_depth;
       result.cut_by_depth_weight += weight;
+      if (subtree >= 0) result.subtrees[static_cast<std::size_t>(subtree)].cut_weight += weight;
       return false;
     }
     if (weight < (reflected ? min_weight_reflected : options.min_weight)) {
       ++result.counts.cut_by_weight;
       result.cut_by_weight_weight += weight;
+      if (subtree >= 0) result.subtrees[static_cast<std::size_t>(subtree)].cut_weight += weight;
       return false;
     }
     return true;
+  };
+  auto is_deferred = [&](std::uint64_t id) {
+    return std::find(deferred.ids, deferred.ids + deferred.count, id) != deferred.ids + deferred.count;
   };
 
   while (true) {
@@ -249,6 +275,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
       bg.tag = tag_of(b);
       result.background.push_back(bg);
       result.background_weight += b.weight;
+      if (b.subtree >= 0) result.subtrees[static_cast<std::size_t>(b.subtree)].background_weight += b.weight;
       continue;
     }
 
@@ -263,6 +290,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
       oh.tag = tag_of(b);
       result.opaque_hits.push_back(oh);
       result.opaque_weight += b.weight;
+      if (b.subtree >= 0) result.subtrees[static_cast<std::size_t>(b.subtree)].opaque_weight += b.weight;
       continue;
     }
 
@@ -321,15 +349,29 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
         ++result.counts.reflections_skipped;
         result.skipped_reflection_weight += w_reflected;
       }
-    } else if (admit(w_reflected, b.depth + 1, true)) {
-      Branch& r = child(stack.emplace_back());
-      reflect_with_differential(b.direction, b.ddirection, normal, dnormal, &r.direction, &r.ddirection);
-      r.origin = spawn_origin(*hit, r.direction, seg_medium == kFluid);
-      r.weight = w_reflected;
-      r.medium = seg_medium;
-      r.any_reflection = true;
+    } else {
+      const std::uint64_t r_path = extend_path(b.path, hit->shape_index, true);
+      if (b.subtree < 0 && deferred.count > 0 && w_reflected > 0 && is_deferred(r_path)) {
+        result.deferred.push_back(r_path);
+        result.deferred_weight += w_reflected;
+      } else if (admit(w_reflected, b.depth + 1, true, b.subtree)) {
+        Branch& r = child(stack.emplace_back());
+        reflect_with_differential(b.direction, b.ddirection, normal, dnormal, &r.direction, &r.ddirection);
+        r.origin = spawn_origin(*hit, r.direction, seg_medium == kFluid);
+        r.weight = w_reflected;
+        r.path = r_path;
+        r.subtree = b.subtree;
+        if (b.subtree < 0) {  // off the refracted chain: a new subtree
+          r.subtree = static_cast<int>(result.subtrees.size());
+          ReflectedSubtree& st = result.subtrees.emplace_back();
+          st.id = r_path;
+          st.weight = w_reflected;
+        }
+        r.medium = seg_medium;
+        r.any_reflection = true;
+      }
     }
-    if (refracted && admit(w_refracted, b.depth + 1, b.any_reflection)) {
+    if (refracted && admit(w_refracted, b.depth + 1, b.any_reflection, b.subtree)) {
       Branch& t = child(ws.slot[1 - current]);
       t.direction = *refracted;
       const Eigen::Vector3d facing = ndn < 0 ? normal : Eigen::Vector3d(-normal);
@@ -337,6 +379,8 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
       t.ddirection = refraction_differential(b.direction, b.ddirection, facing, dfacing, t.direction, n1 / n2);
       t.origin = spawn_origin(*hit, t.direction, other_medium == kFluid);
       t.weight = w_refracted;
+      t.path = extend_path(b.path, hit->shape_index, false);
+      t.subtree = b.subtree;
       t.medium = other_medium;
       t.any_reflection = b.any_reflection;
       current = 1 - current;

@@ -5,6 +5,7 @@
 // what is tested are in docs/tracer.md. Double precision, mm. No I/O.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -67,6 +68,14 @@ struct TraceOptions {
   // 0 (or anything <= min_weight): min_weight applies to every branch.
   double min_weight_reflected = 0;
   int max_depth = 32;        // most interface events on one path; a deeper branch is cut
+  // Read by build_transport_map only (render/reflection_grid.h): with a grid
+  // g > 1 the reflected subtrees are traced on every g-th camera sample of
+  // each axis and interpolated between four such samples where a subtree
+  // agrees among them to within reflection_grid_tolerance (a fraction of a
+  // pixel's footprint on the sheet, and of each weight); elsewhere it is
+  // traced. 1: every sample traced whole.
+  int reflection_grid = 1;
+  double reflection_grid_tolerance = 0.1;
 };
 
 // Interface events on the path before the crossing: none, refractions only,
@@ -78,6 +87,10 @@ struct SheetCrossing {
   double weight = 0;
   int depth = 0;  // interface events on the path so far
   CrossingTag tag = CrossingTag::direct;
+  // The surfaces met before, and how (refracted or reflected), hashed: equal
+  // for rays that took the same path.
+  std::uint64_t path = 0;
+  int subtree = -1;  // index into TraceResult::subtrees; -1 on the camera ray's refracted chain
   Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();
   // Footprint Jacobian d(s, t)/d(pixel col, row) in mm per pixel, from the ray
@@ -115,6 +128,23 @@ struct TraceCounts {
                                  // side of the surface, so the geometric normal was used
 };
 
+// A branch reflected off the camera ray's refracted chain (the chain of
+// refractions that carries most of the light), with everything that descends
+// from it: the unit the reflection grid interpolates (render/reflection_grid.h).
+struct ReflectedSubtree {
+  std::uint64_t id = 0;  // the reflected branch's path: equal for rays whose refracted chains met
+                         // the same surfaces up to that reflection
+  double weight = 0;     // at the reflection
+  double background_weight = 0, opaque_weight = 0, cut_weight = 0;  // its shares of TraceResult's
+};
+
+// Subtrees (ReflectedSubtree::id) the caller provides otherwise: trace_ray
+// does not spawn them and lists the ones it met in TraceResult::deferred.
+struct DeferredSubtrees {
+  const std::uint64_t* ids = nullptr;
+  std::size_t count = 0;
+};
+
 // Where the unit weight of the camera ray went. Every bit of it ends in exactly
 // one of these bins, so terminal_weight_sum() == 1 up to round-off.
 struct TraceResult {
@@ -128,10 +158,13 @@ struct TraceResult {
   double cut_by_weight_weight = 0;
   double cut_by_depth_weight = 0;
   double skipped_reflection_weight = 0;
+  std::vector<ReflectedSubtree> subtrees;  // spawned off the refracted chain, in order
+  std::vector<std::uint64_t> deferred;     // ids of the DeferredSubtrees met, in order
+  double deferred_weight = 0;              // their weight
 
   double terminal_weight_sum() const {
     return background_weight + opaque_weight + absorbed_weight + cut_by_weight_weight + cut_by_depth_weight +
-           skipped_reflection_weight;
+           skipped_reflection_weight + deferred_weight;
   }
 };
 
@@ -152,9 +185,10 @@ std::unique_ptr<SceneIndex> make_scene_index(const TraceScene& scene);
 // transfer, refraction and reflection (Igehy 1999), giving each crossing its
 // footprint Jacobian. Throws std::invalid_argument for a zero or non-finite
 // direction or origin. Deterministic: the same input gives the same output,
-// branch order included (depth first, refracted branch before reflected).
+// branch order included (depth first, refracted branch before reflected), so
+// the refracted chain's crossings come first and each subtree's are contiguous.
 void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay& ray, const TraceOptions& options,
-               TraceResult* result);
+               TraceResult* result, DeferredSubtrees deferred = {});
 
 // The same with a linear search over the solids and no differentials: the
 // reference tracer of the tests (slow for big scenes; no setup needed).

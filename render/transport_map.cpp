@@ -5,10 +5,14 @@
 #endif
 
 #include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include "render/parallel_rows.h"
+#include "render/reflection_grid.h"
 #include "render/row_camera_rays.h"
 #include "render/trace_scene_builder.h"
 
@@ -23,18 +27,56 @@ std::size_t TransportMap::memory_bytes() const {
 
 namespace {
 
+// What the traced samples of a row (or of an anchor row) did.
+struct RowStats {
+  long camera_rays = 0, branches = 0, no_hit_pixels = 0, unproject_failures = 0;
+  long closed_form = 0, cut_by_weight = 0, cut_by_depth = 0, reflections_skipped = 0, interpolated = 0;
+  double cut_weight = 0;
+
+  // One traced sample, weights times scale (its deferred subtrees are not cut).
+  void add(const TraceResult& r, double scale) {
+    ++camera_rays;
+    branches += r.counts.branches_traced;
+    closed_form += r.counts.closed_form;
+    cut_by_weight += r.counts.cut_by_weight;
+    cut_by_depth += r.counts.cut_by_depth;
+    reflections_skipped += r.counts.reflections_skipped;
+    cut_weight += (r.cut_by_weight_weight + r.cut_by_depth_weight + r.skipped_reflection_weight) * scale;
+  }
+  void add_to(TransportStats* st) const {
+    st->camera_rays += camera_rays;
+    st->branches_traced += branches;
+    st->pixels_without_solid_hit += no_hit_pixels;
+    st->unproject_failures += unproject_failures;
+    st->closed_form_rays += closed_form;
+    st->branches_cut_by_weight += cut_by_weight;
+    st->branches_cut_by_depth += cut_by_depth;
+    st->reflections_skipped += reflections_skipped;
+    st->subtrees_interpolated += interpolated;
+    st->cut_weight += cut_weight;
+  }
+};
+
 struct RowBuffer {
   std::vector<std::uint32_t> counts;  // crossings per pixel of the row
   std::vector<float> s, t, w, ds_dcol, ds_drow, dt_dcol, dt_drow;
   std::vector<std::uint8_t> tag;
   std::vector<float> background, opaque;
-  long camera_rays = 0, branches = 0, no_hit_pixels = 0, unproject_failures = 0;
-  long closed_form = 0, cut_by_weight = 0, cut_by_depth = 0, reflections_skipped = 0;
-  double cut_weight = 0;
+  RowStats stats;
 
   void clear() {
     for (auto* v : {&s, &t, &w, &ds_dcol, &ds_drow, &dt_dcol, &dt_drow}) v->clear();
     tag.clear();
+  }
+  void push(const GridCrossing& c) {
+    s.push_back(c.s_mm);
+    t.push_back(c.t_mm);
+    w.push_back(c.weight);
+    tag.push_back(c.tag);
+    ds_dcol.push_back(c.ds_dcol);
+    ds_drow.push_back(c.ds_drow);
+    dt_dcol.push_back(c.dt_dcol);
+    dt_drow.push_back(c.dt_drow);
   }
   // The crossings of `from`, in arrays of exactly their size (the row waits
   // for the concatenation: no growth slack).
@@ -50,6 +92,33 @@ struct RowBuffer {
   }
 };
 
+// The camera samples as one lattice of (width k) x (height k) points, and its
+// reflection grid: anchors on every g-th point of each axis, cells between
+// four of them.
+struct SampleLattice {
+  int k = 1, g = 1, width = 0, height = 0;  // width, height in samples
+  int anchors_x = 0, anchors_y = 0;
+  SampleLattice(int width_px, int height_px, int samples_per_axis, int grid)
+      : k(samples_per_axis), g(grid), width(width_px * samples_per_axis), height(height_px * samples_per_axis) {
+    anchors_x = (width - 1) / g + 1;
+    anchors_y = (height - 1) / g + 1;
+  }
+  // The pixel coordinates of sample (x, y), as RowCameraRays makes them.
+  Eigen::Vector2d pixel(int x, int y) const {
+    const int col = x / k, sx = x % k, row = y / k, sy = y % k;
+    return {col + (sx + 0.5) / k - 0.5, row + (sy + 0.5) / k - 0.5};
+  }
+  bool is_anchor(int x, int y) const { return x % g == 0 && y % g == 0; }
+  int cells_x() const { return std::max(anchors_x - 1, 0); }
+  int cells_y() const { return std::max(anchors_y - 1, 0); }
+  // The cell of sample (x, y), or -1 where it has no four anchors around it.
+  int cell(int x, int y) const {
+    const int cx = x / g, cy = y / g;
+    if (cx >= cells_x() || cy >= cells_y()) return -1;
+    return cy * cells_x() + cx;
+  }
+};
+
 void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
                const RigidTransform& camera_from_world, const TraceOptions& options, int k, int row,
                RowBuffer* out) {
@@ -58,7 +127,6 @@ void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraMod
   // capacity from row to row, and are copied to the row once, at their size.
   thread_local RowBuffer scratch;
   scratch.clear();
-  RowBuffer* const crossings = &scratch;
   const int width = camera.width_px();
   const double inv_samples = 1.0 / (static_cast<double>(k) * k);
   out->counts.assign(static_cast<std::size_t>(width), 0);
@@ -73,39 +141,217 @@ void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraMod
       for (int sx = 0; sx < k; ++sx) {
         const std::optional<CameraRay>& ray = rays.next();
         if (!ray) {
-          ++out->unproject_failures;
+          ++out->stats.unproject_failures;
           continue;
         }
         trace_ray(scene, index, *ray, options, &r);
-        ++out->camera_rays;
-        out->branches += r.counts.branches_traced;
-        out->closed_form += r.counts.closed_form;
-        out->cut_by_weight += r.counts.cut_by_weight;
-        out->cut_by_depth += r.counts.cut_by_depth;
-        out->reflections_skipped += r.counts.reflections_skipped;
-        out->cut_weight += (r.cut_by_weight_weight + r.cut_by_depth_weight + r.skipped_reflection_weight) * inv_samples;
+        out->stats.add(r, inv_samples);
         if (r.counts.branches_traced > 1 || !r.opaque_hits.empty()) any_hit = true;
-        for (const SheetCrossing& c : r.crossings) {
-          crossings->s.push_back(static_cast<float>(c.s_mm));
-          crossings->t.push_back(static_cast<float>(c.t_mm));
-          crossings->w.push_back(static_cast<float>(c.weight * inv_samples));
-          crossings->tag.push_back(static_cast<std::uint8_t>(c.tag));
-          crossings->ds_dcol.push_back(static_cast<float>(c.dst_dpixel(0, 0)));
-          crossings->ds_drow.push_back(static_cast<float>(c.dst_dpixel(0, 1)));
-          crossings->dt_dcol.push_back(static_cast<float>(c.dst_dpixel(1, 0)));
-          crossings->dt_drow.push_back(static_cast<float>(c.dst_dpixel(1, 1)));
-          ++count;
-        }
+        for (const SheetCrossing& c : r.crossings) scratch.push(grid_crossing(c, inv_samples));
+        count += static_cast<std::uint32_t>(r.crossings.size());
         background += r.background_weight * inv_samples;
         opaque += r.opaque_weight * inv_samples;
       }
     }
-    if (!any_hit) ++out->no_hit_pixels;
+    if (!any_hit) ++out->stats.no_hit_pixels;
     out->counts[static_cast<std::size_t>(col)] = count;
     out->background[static_cast<std::size_t>(col)] = static_cast<float>(background);
     out->opaque[static_cast<std::size_t>(col)] = static_cast<float>(opaque);
   }
   out->take_crossings(scratch);
+}
+
+// The reflection grid's anchors: anchor row ay, traced whole.
+void trace_anchor_row(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
+                      const RigidTransform& camera_from_world, const TraceOptions& options,
+                      const SampleLattice& lattice, int ay, AnchorRow* out, RowStats* stats) {
+  thread_local TraceResult r;
+  thread_local std::vector<Eigen::Vector2d> pixels;
+  thread_local std::vector<std::optional<CameraRay>> rays;
+  pixels.clear();
+  for (int ax = 0; ax < lattice.anchors_x; ++ax) pixels.push_back(lattice.pixel(ax * lattice.g, ay * lattice.g));
+  pixel_camera_rays(camera, camera_from_world, pixels, &rays);
+  const double inv_samples = 1.0 / (static_cast<double>(lattice.k) * lattice.k);
+  for (const std::optional<CameraRay>& ray : rays) {
+    if (!ray) {
+      ++stats->unproject_failures;
+      out->add(nullptr, inv_samples);
+      continue;
+    }
+    trace_ray(scene, index, *ray, options, &r);
+    stats->add(r, inv_samples);
+    out->add(&r, inv_samples);
+  }
+}
+
+// The subtrees that agree in each cell of one cell row (CSR over its cells).
+struct CellRow {
+  std::vector<std::uint32_t> begin;  // cells_x + 1
+  std::vector<std::uint64_t> ids;
+};
+
+// A pixel row with the reflection grid: anchors from their rows; every other
+// sample traced with the subtrees that agree in its cell deferred, and those
+// interpolated.
+void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
+                       const RigidTransform& camera_from_world, const TraceOptions& options,
+                       const SampleLattice& lattice, const std::vector<AnchorRow>& anchors,
+                       const std::vector<CellRow>& cells, int row, RowBuffer* out) {
+  thread_local TraceResult r;
+  thread_local RowBuffer scratch;
+  thread_local std::vector<Eigen::Vector2d> pixels;
+  thread_local std::vector<std::optional<CameraRay>> rays;
+  thread_local std::vector<GridCrossing> interpolated;
+  scratch.clear();
+  const int width = camera.width_px(), k = lattice.k, g = lattice.g;
+  const double inv_samples = 1.0 / (static_cast<double>(k) * k);
+  const double cell_px = static_cast<double>(g) / k;
+  pixels.clear();
+  for (int col = 0; col < width; ++col)
+    for (int sy = 0; sy < k; ++sy)
+      for (int sx = 0; sx < k; ++sx)
+        if (!lattice.is_anchor(col * k + sx, row * k + sy)) pixels.push_back(lattice.pixel(col * k + sx, row * k + sy));
+  pixel_camera_rays(camera, camera_from_world, pixels, &rays);
+  std::size_t next_ray = 0;
+  out->counts.assign(static_cast<std::size_t>(width), 0);
+  out->background.assign(static_cast<std::size_t>(width), 0.0f);
+  out->opaque.assign(static_cast<std::size_t>(width), 0.0f);
+  for (int col = 0; col < width; ++col) {
+    bool any_hit = false;
+    double background = 0, opaque = 0;
+    std::uint32_t count = 0;
+    for (int sy = 0; sy < k; ++sy) {
+      for (int sx = 0; sx < k; ++sx) {
+        const int x = col * k + sx, y = row * k + sy;
+        if (lattice.is_anchor(x, y)) {  // traced whole in its anchor row
+          const AnchorRow& a = anchors[static_cast<std::size_t>(y / g)];
+          const int i = x / g;
+          for (int m = 0; m < a.crossing_count(i); ++m) scratch.push(a.crossings(i)[m]);
+          count += static_cast<std::uint32_t>(a.crossing_count(i));
+          background += a.background(i);
+          opaque += a.opaque(i);
+          any_hit = any_hit || a.met_solid(i);
+          continue;
+        }
+        const std::optional<CameraRay>& ray = rays[next_ray++];
+        if (!ray) {
+          ++out->stats.unproject_failures;
+          continue;
+        }
+        DeferredSubtrees deferred;
+        const int cx = x / g, cy = y / g;
+        if (lattice.cell(x, y) >= 0) {
+          const CellRow& cr = cells[static_cast<std::size_t>(cy)];
+          deferred.ids = cr.ids.data() + cr.begin[static_cast<std::size_t>(cx)];
+          deferred.count = cr.begin[static_cast<std::size_t>(cx) + 1] - cr.begin[static_cast<std::size_t>(cx)];
+        }
+        trace_ray(scene, index, *ray, options, &r, deferred);
+        out->stats.add(r, inv_samples);
+        if (r.counts.branches_traced > 1 || !r.opaque_hits.empty()) any_hit = true;
+        for (const SheetCrossing& c : r.crossings) scratch.push(grid_crossing(c, inv_samples));
+        count += static_cast<std::uint32_t>(r.crossings.size());
+        background += r.background_weight * inv_samples;
+        opaque += r.opaque_weight * inv_samples;
+        if (r.deferred.empty()) continue;
+        const AnchorRow &top = anchors[static_cast<std::size_t>(cy)], &bottom = anchors[static_cast<std::size_t>(cy) + 1];
+        interpolated.clear();
+        double cut = 0;
+        for (std::uint64_t id : r.deferred) {
+          SubtreeCorners corners;
+          subtree_corners(top, bottom, cx, id, &corners);  // found: the cell's agreeing subtrees are in all four
+          interpolate_subtree(corners, cell_px, static_cast<double>(x % g) / g, static_cast<double>(y % g) / g,
+                              &interpolated, &background, &opaque, &cut);
+        }
+        for (const GridCrossing& c : interpolated) scratch.push(c);
+        count += static_cast<std::uint32_t>(interpolated.size());
+        out->stats.cut_weight += cut;
+        out->stats.interpolated += static_cast<long>(r.deferred.size());
+      }
+    }
+    if (!any_hit) ++out->stats.no_hit_pixels;
+    out->counts[static_cast<std::size_t>(col)] = count;
+    out->background[static_cast<std::size_t>(col)] = static_cast<float>(background);
+    out->opaque[static_cast<std::size_t>(col)] = static_cast<float>(opaque);
+  }
+  out->take_crossings(scratch);
+}
+
+// The anchor rows pixel row `row` reads: [first, last].
+std::pair<int, int> anchor_rows_of(const SampleLattice& lattice, int row) {
+  const int first = row * lattice.k / lattice.g;
+  const int last = std::min((row * lattice.k + lattice.k - 1) / lattice.g + 1, lattice.anchors_y - 1);
+  return {first, last};
+}
+
+// The rows of a map: traced sample by sample, or with the reflection grid.
+std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
+                                  const RigidTransform& camera_from_world, const TraceOptions& options, int k,
+                                  int* threads, std::vector<RowStats>* anchor_stats,
+                                  const std::function<void(int, int)>& progress) {
+  const int height = camera.height_px();
+  std::vector<RowBuffer> rows(static_cast<std::size_t>(height));
+  if (!options.reflections || options.reflection_grid == 1) {
+    // trace_ray throws only for non-finite rays, which pixel_camera_ray never produces.
+    *threads = parallel_rows(
+        height, *threads,
+        [&](int row) {
+          trace_row(scene, index, camera, camera_from_world, options, k, row, &rows[static_cast<std::size_t>(row)]);
+        },
+        progress);
+    return rows;
+  }
+  const SampleLattice lattice(camera.width_px(), height, k, options.reflection_grid);
+  const int anchor_rows = lattice.anchors_y;
+  // Progress over the two tracing passes together, rows of either counted alike.
+  const auto report = [&](int offset) -> std::function<void(int, int)> {
+    if (!progress) return {};
+    return [&progress, offset, total = anchor_rows + height](int done, int) { progress(offset + done, total); };
+  };
+  std::vector<AnchorRow> anchors(static_cast<std::size_t>(anchor_rows));
+  anchor_stats->assign(static_cast<std::size_t>(anchor_rows), RowStats{});
+  parallel_rows(
+      anchor_rows, *threads,
+      [&](int ay) {
+        trace_anchor_row(scene, index, camera, camera_from_world, options, lattice, ay,
+                         &anchors[static_cast<std::size_t>(ay)], &(*anchor_stats)[static_cast<std::size_t>(ay)]);
+      },
+      report(0));
+  std::vector<CellRow> cells(static_cast<std::size_t>(anchor_rows));
+  const double cell_px = static_cast<double>(lattice.g) / k;
+  GridTolerance tolerance;
+  tolerance.relative = options.reflection_grid_tolerance;
+  tolerance.weight_floor = options.min_weight / (static_cast<double>(k) * k);
+  parallel_rows(lattice.cells_y(), *threads, [&](int cy) {
+    CellRow& cr = cells[static_cast<std::size_t>(cy)];
+    cr.begin.push_back(0);
+    for (int cx = 0; cx < lattice.cells_x(); ++cx) {
+      agreeing_subtrees(anchors[static_cast<std::size_t>(cy)], anchors[static_cast<std::size_t>(cy) + 1], cx, cell_px,
+                        tolerance, &cr.ids);
+      cr.begin.push_back(static_cast<std::uint32_t>(cr.ids.size()));
+    }
+  });
+  // Anchor row a (and cell row a, whose samples all read it) is freed when the
+  // last pixel row that reads it is done: the anchors never all wait beside
+  // the finished rows.
+  std::vector<std::atomic<int>> readers(static_cast<std::size_t>(anchor_rows));
+  for (int row = 0; row < height; ++row) {
+    const auto [first, last] = anchor_rows_of(lattice, row);
+    for (int a = first; a <= last; ++a) ++readers[static_cast<std::size_t>(a)];
+  }
+  *threads = parallel_rows(
+      height, *threads,
+      [&](int row) {
+        trace_row_on_grid(scene, index, camera, camera_from_world, options, lattice, anchors, cells, row,
+                          &rows[static_cast<std::size_t>(row)]);
+        const auto [first, last] = anchor_rows_of(lattice, row);
+        for (int a = first; a <= last; ++a)
+          if (readers[static_cast<std::size_t>(a)].fetch_sub(1, std::memory_order_acq_rel) == 1) {
+            anchors[static_cast<std::size_t>(a)] = AnchorRow{};
+            cells[static_cast<std::size_t>(a)] = CellRow{};
+          }
+      },
+      report(anchor_rows));
+  return rows;
 }
 
 }  // namespace
@@ -116,16 +362,15 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
   if (samples_per_axis < 1) throw std::invalid_argument("build_transport_map: samples_per_axis must be >= 1");
   const int width = camera.width_px(), height = camera.height_px();
 
+  if (options.reflection_grid < 1)
+    throw std::invalid_argument("build_transport_map: reflection_grid must be >= 1");
+  if (!(options.reflection_grid_tolerance >= 0) || !std::isfinite(options.reflection_grid_tolerance))
+    throw std::invalid_argument("build_transport_map: reflection_grid_tolerance must be finite and >= 0");
+
   const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
-  std::vector<RowBuffer> rows(static_cast<std::size_t>(height));
-  // trace_ray throws only for non-finite rays, which pixel_camera_ray never produces.
-  threads = parallel_rows(
-      height, threads,
-      [&](int row) {
-        trace_row(scene, *index, camera, camera_from_world, options, samples_per_axis, row,
-                  &rows[static_cast<std::size_t>(row)]);
-      },
-      progress);
+  std::vector<RowStats> anchor_stats;  // the reflection grid's anchor rows
+  std::vector<RowBuffer> rows =
+      trace_rows(scene, *index, camera, camera_from_world, options, samples_per_axis, &threads, &anchor_stats, progress);
 
   TransportMap map;
   map.width = width;
@@ -159,15 +404,7 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
     map.dt_drow.insert(map.dt_drow.end(), rb.dt_drow.begin(), rb.dt_drow.end());
     map.background_weight.insert(map.background_weight.end(), rb.background.begin(), rb.background.end());
     map.opaque_weight.insert(map.opaque_weight.end(), rb.opaque.begin(), rb.opaque.end());
-    map.stats.camera_rays += rb.camera_rays;
-    map.stats.branches_traced += rb.branches;
-    map.stats.pixels_without_solid_hit += rb.no_hit_pixels;
-    map.stats.unproject_failures += rb.unproject_failures;
-    map.stats.closed_form_rays += rb.closed_form;
-    map.stats.branches_cut_by_weight += rb.cut_by_weight;
-    map.stats.branches_cut_by_depth += rb.cut_by_depth;
-    map.stats.reflections_skipped += rb.reflections_skipped;
-    map.stats.cut_weight += rb.cut_weight;
+    rb.stats.add_to(&map.stats);
     rb = RowBuffer{};  // free as we go: peak memory ~ one copy
 #ifdef __GLIBC__
     // The rows' small blocks go back to malloc's free lists, which the map's
@@ -175,6 +412,7 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
     if (++rows_freed % 64 == 0) malloc_trim(0);
 #endif
   }
+  for (const RowStats& st : anchor_stats) st.add_to(&map.stats);
   map.stats.crossings = static_cast<long>(total);
   return map;
 }

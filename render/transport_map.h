@@ -14,6 +14,11 @@
 // order (row-major over the sub-grid). Pixel (0, 0) is the centre of the
 // top-left pixel (docs/conventions.md).
 //
+// With TraceOptions::reflection_grid g > 1 (and reflections on) reflected
+// subtrees that agree among anchors on every g-th sample are interpolated
+// between them (render/reflection_grid.h); each sample's refracted chain is
+// always traced. A sample's interpolated crossings follow its traced ones.
+//
 // Known limit: a pixel whose ray cannot be unprojected (past the lens model's
 // fold) has no crossings and no background weight (counted in unproject_failures).
 #include <cstdint>
@@ -37,6 +42,8 @@ struct TransportStats {
   long branches_cut_by_weight = 0;    // below TraceOptions::min_weight
   long branches_cut_by_depth = 0;     // beyond TraceOptions::max_depth
   long reflections_skipped = 0;       // not spawned (TraceOptions::reflections = false)
+  long subtrees_interpolated = 0;     // reflected subtrees interpolated, not traced
+                                      // (TraceOptions::reflection_grid); not kept in map files
   double cut_weight = 0;              // weight of those three, summed over pixels (1 = one whole pixel)
   int threads = 0;                    // threads used
 };
@@ -62,7 +69,8 @@ struct TransportMap {
 // Rows are handed to threads dynamically, each row into its own buffer; the
 // buffers are concatenated in row order, so the output is bit-identical for any
 // thread count. Throws std::invalid_argument for samples_per_axis < 1 and
-// std::overflow_error beyond 2^32 - 1 crossings.
+// std::overflow_error beyond 2^32 - 1 crossings; std::invalid_argument for a
+// reflection_grid < 1 or a negative or non-finite reflection_grid_tolerance.
 // progress (optional) is called from the calling thread with (rows done, rows)
 // about every 1/100 of the work; it must not throw.
 TransportMap build_transport_map(const TraceScene& scene, const CameraModel& camera,

@@ -1,0 +1,113 @@
+#pragma once
+// Reflected light on a coarser grid of camera samples (TraceOptions::
+// reflection_grid, docs/tracer.md). Ghost light carries a few per cent of a
+// pixel's weight but, with its Fresnel trees, most of a map's segments. The
+// transport map traces it whole on every g-th sample of each axis only (the
+// anchors); every other sample traces its own refracted chain, which carries
+// most of the light, and takes those of its reflected subtrees
+// (ReflectedSubtree) that agree among the four anchors around it (its cell)
+// from them, interpolated; the others it traces.
+//
+// A subtree agrees in a cell when all four anchors have it (the same id: their
+// refracted chains met the same surfaces up to its reflection) with the same
+// crossings (the same paths, in the same order), each anchor's crossing
+// predicted from its edge neighbour's position and footprint Jacobian to
+// within `tolerance` of a footprint (the square root of |det J|, the smaller
+// of the two), each crossing's weight equal to within `tolerance` relative,
+// and the subtree's light that left the scene or ended on opaque solids equal
+// to within `tolerance` relative or within the cut-off (min_weight): those
+// sums jump by a cut branch's weight where a branch near the cut-off is
+// followed at one anchor and cut at the next, which the tracer's cut-off
+// already allows for.
+// No I/O.
+#include <cstdint>
+#include <vector>
+
+#include "render/path_tracer.h"
+
+namespace glasspiv {
+
+// One sheet crossing as the map stores it (float, weight already divided by
+// the samples per pixel) and its path.
+struct GridCrossing {
+  std::uint64_t path = 0;
+  float s_mm = 0, t_mm = 0, weight = 0;
+  float ds_dcol = 0, ds_drow = 0, dt_dcol = 0, dt_drow = 0;  // mm per pixel
+  std::uint8_t tag = 0;
+};
+
+// c in the map's float form, its weight times `scale` (1 / samples^2).
+GridCrossing grid_crossing(const SheetCrossing& c, double scale);
+
+// One reflected subtree of an anchor (weights in the map's units).
+struct SubtreeRecord {
+  std::uint64_t id = 0;
+  float background = 0, opaque = 0;  // its light that left the scene / ended on opaque solids
+  float cut = 0;                     // its light cut by weight or depth (statistics only)
+  std::uint32_t first = 0, count = 0;  // its crossings among the anchor's
+};
+
+// The anchors of one anchor row, in column order: each one's whole trace (what
+// the map stores for it) and its subtrees.
+class AnchorRow {
+ public:
+  // Appends the next anchor: r's result with weights times scale, or nullptr
+  // for a ray that could not be unprojected.
+  void add(const TraceResult* r, double scale);
+  int size() const { return static_cast<int>(met_solid_.size()); }
+  // Anchor i's crossings, all of them, as traced.
+  const GridCrossing* crossings(int i) const { return crossings_.data() + begin_[at(i)]; }
+  int crossing_count(int i) const { return static_cast<int>(begin_[at(i) + 1] - begin_[at(i)]); }
+  double background(int i) const { return background_[at(i)]; }
+  double opaque(int i) const { return opaque_[at(i)]; }
+  // Whether anchor i's ray met a solid (for TransportStats::pixels_without_solid_hit).
+  bool met_solid(int i) const { return met_solid_[at(i)] != 0; }
+  // Anchor i's subtrees, in the order traced; the one with `id`, or nullptr.
+  const SubtreeRecord* subtrees(int i) const { return subtrees_.data() + subtree_begin_[at(i)]; }
+  int subtree_count(int i) const { return static_cast<int>(subtree_begin_[at(i) + 1] - subtree_begin_[at(i)]); }
+  const SubtreeRecord* find_subtree(int i, std::uint64_t id) const;
+
+ private:
+  static std::size_t at(int i) { return static_cast<std::size_t>(i); }
+  std::vector<std::uint32_t> begin_{0}, subtree_begin_{0};  // per anchor + 1
+  std::vector<GridCrossing> crossings_;
+  std::vector<SubtreeRecord> subtrees_;
+  std::vector<double> background_, opaque_;  // the whole trace's, as the map sums them
+  std::vector<std::uint8_t> met_solid_;
+};
+
+// One subtree at the four corners of a cell: [0] top left, [1] top right (g
+// samples to the right), [2] bottom left (g samples down), [3] bottom right.
+struct SubtreeCorners {
+  const SubtreeRecord* record[4];
+  const GridCrossing* crossings[4];  // each corner's crossings of the subtree
+};
+
+// The subtree `id` at the corners of the cell whose top-left anchor is
+// `col` of `top` (bottom: the next anchor row); false where a corner lacks it.
+bool subtree_corners(const AnchorRow& top, const AnchorRow& bottom, int col, std::uint64_t id, SubtreeCorners* out);
+
+// How closely a subtree must agree among the anchors (see the top).
+struct GridTolerance {
+  double relative = 0.1;    // of a footprint; of a weight
+  double weight_floor = 0;  // the cut-off in the map's units (min_weight / samples^2)
+};
+
+// Whether the subtree may be interpolated in the cell (see the top); cell_px:
+// the cell's side in pixels (g / samples_per_axis).
+bool subtree_agrees(const SubtreeCorners& corners, double cell_px, const GridTolerance& tolerance);
+
+// The ids of the subtrees that agree in the cell of top-left anchor `col`, in
+// the order of its top-left anchor's; appended to *ids.
+void agreeing_subtrees(const AnchorRow& top, const AnchorRow& bottom, int col, double cell_px,
+                       const GridTolerance& tolerance, std::vector<std::uint64_t>* ids);
+
+// The subtree at the point (fx, fy) in [0, 1]^2 of the cell: each crossing's
+// position interpolated from the corners' positions and footprint Jacobians
+// (cubic Hermite along both axes, exact where the position is quadratic in
+// the pixel), its Jacobian and weight and the subtree's weights bilinearly.
+// Appends the crossings to *out; adds to the three weights.
+void interpolate_subtree(const SubtreeCorners& corners, double cell_px, double fx, double fy,
+                         std::vector<GridCrossing>* out, double* background, double* opaque, double* cut);
+
+}  // namespace glasspiv

@@ -1,0 +1,363 @@
+// The reflection grid (render/reflection_grid.h): the tracer's subtree
+// bookkeeping and deferral, the agreement test and the interpolation on
+// fields with a known answer, and maps built with the grid against the same
+// maps traced whole.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <tuple>
+
+#include "calib/camera_model.h"
+#include "render/forward_render.h"
+#include "render/path_tracer.h"
+#include "render/reflection_grid.h"
+#include "render/scene_yaml.h"
+#include "render/trace_scene_builder.h"
+#include "render/transport_map.h"
+#include "tests/render/test_maps.h"
+
+namespace glasspiv {
+namespace {
+
+CameraModel pinhole() { return CameraModel(40, 30, 120.0, 110.0, 19.3, 14.6); }
+
+// A glass slab and a sphere in front of the sheet, no absorption: every bit
+// of a subtree's weight ends in the background, on the sheet side or cut.
+TraceScene slab_and_sphere() {
+  TraceScene scene;
+  scene.sheet.origin_mm = Eigen::Vector3d(0, 0, 200);
+  scene.sheet.extent_s_mm = scene.sheet.extent_t_mm = 1000;
+  scene.solids.push_back({make_slab(Eigen::Vector3d(0, 0, 65), Eigen::Vector3d::UnitZ(), 10, 1000),
+                          TraceMaterial::glass(1.5)});
+  scene.solids.push_back({Sphere{Eigen::Vector3d(3, -2, 120), 15}, TraceMaterial::glass(1.6)});
+  return scene;
+}
+
+CameraRay ray_towards(double x, double y) {
+  CameraRay ray;
+  ray.direction = Eigen::Vector3d(x, y, 1);
+  ray.ddirection_dpixel << 1.0 / 120, 0, 0, 1.0 / 110, 0, 0;
+  return ray;
+}
+
+TEST(TraceRaySubtrees, EachSubtreeAccountsForItsWeightAndItsCrossingsAreContiguous) {
+  const TraceScene scene = slab_and_sphere();
+  const auto index = make_scene_index(scene);
+  TraceOptions options;
+  options.min_weight = 1e-5;
+  TraceResult r;
+  int rays_with_subtrees = 0;
+  for (double x : {-0.1, 0.0, 0.02, 0.05})
+    for (double y : {-0.05, 0.0, 0.03}) {
+      trace_ray(scene, *index, ray_towards(x, y), options, &r);
+      if (r.subtrees.empty()) continue;
+      ++rays_with_subtrees;
+      std::vector<std::uint64_t> ids;
+      for (const ReflectedSubtree& st : r.subtrees) {
+        // No absorption, no opaque solids: what was spawned left, or was cut.
+        EXPECT_NEAR(st.weight, st.background_weight + st.opaque_weight + st.cut_weight, 1e-12);
+        EXPECT_EQ(st.opaque_weight, 0);
+        ids.push_back(st.id);
+      }
+      std::sort(ids.begin(), ids.end());
+      EXPECT_EQ(std::adjacent_find(ids.begin(), ids.end()), ids.end()) << "subtree ids repeat";
+      // The refracted chain's crossings first, then each subtree's in one run.
+      std::vector<int> runs;
+      for (const SheetCrossing& c : r.crossings) {
+        EXPECT_EQ(c.subtree >= 0, c.tag == CrossingTag::with_reflections);
+        if (c.subtree < 0) {
+          EXPECT_TRUE(runs.empty()) << "a refracted-chain crossing after a subtree's";
+        } else if (runs.empty() || runs.back() != c.subtree) {
+          EXPECT_EQ(std::find(runs.begin(), runs.end(), c.subtree), runs.end()) << "subtree split in two runs";
+          runs.push_back(c.subtree);
+        }
+      }
+      EXPECT_NEAR(r.terminal_weight_sum(), 1, 1e-12);
+    }
+  EXPECT_GE(rays_with_subtrees, 6);
+}
+
+TEST(TraceRaySubtrees, DeferredSubtreesAreNotTracedAndTheRefractedChainIsUnchanged) {
+  const TraceScene scene = slab_and_sphere();
+  const auto index = make_scene_index(scene);
+  TraceOptions options;
+  options.min_weight = 1e-5;
+  TraceResult whole, part;
+  trace_ray(scene, *index, ray_towards(0.02, 0.03), options, &whole);
+  ASSERT_GE(whole.subtrees.size(), 3u);
+  std::vector<std::uint64_t> ids;
+  double spawned = 0;
+  for (const ReflectedSubtree& st : whole.subtrees) {
+    ids.push_back(st.id);
+    spawned += st.weight;
+  }
+  trace_ray(scene, *index, ray_towards(0.02, 0.03), options, &part, DeferredSubtrees{ids.data(), ids.size()});
+  EXPECT_EQ(part.deferred, ids);  // met in the order they were spawned
+  EXPECT_EQ(part.deferred_weight, spawned);
+  EXPECT_TRUE(part.subtrees.empty());
+  EXPECT_NEAR(part.terminal_weight_sum(), 1, 1e-12);
+  std::size_t n = 0;
+  for (const SheetCrossing& c : whole.crossings) {
+    if (c.subtree >= 0) continue;
+    ASSERT_LT(n, part.crossings.size());
+    EXPECT_EQ(part.crossings[n].s_mm, c.s_mm);
+    EXPECT_EQ(part.crossings[n].weight, c.weight);
+    EXPECT_EQ(part.crossings[n].path, c.path);
+    ++n;
+  }
+  EXPECT_EQ(n, part.crossings.size());
+  // Deferring one subtree leaves the others traced as before.
+  trace_ray(scene, *index, ray_towards(0.02, 0.03), options, &part, DeferredSubtrees{ids.data() + 1, 1});
+  EXPECT_EQ(part.deferred, std::vector<std::uint64_t>{ids[1]});
+  EXPECT_EQ(part.subtrees.size(), whole.subtrees.size() - 1);
+}
+
+// ---------------------------------------------------------------- on a known field
+
+constexpr double kCellPx = 2;
+
+// A subtree with one crossing whose position is quadratic in the pixel,
+// s = 3 + 0.5 c - 0.2 r + 0.005 c^2 + 0.002 c r + 0.003 r^2,
+// t = -1 + 0.1 c + 0.4 r - 0.004 c^2 + 0.001 c r + 0.002 r^2 (mm; c, r: col,
+// row), its footprint Jacobian the derivative, weight 0.04 + 0.001 c.
+TraceResult quadratic_anchor(double col, double row, std::uint64_t id = 77) {
+  TraceResult r;
+  ReflectedSubtree& st = r.subtrees.emplace_back();
+  st.id = id;
+  st.weight = 0.05;
+  st.background_weight = 0.01;
+  SheetCrossing& main = r.crossings.emplace_back();
+  main.s_mm = col;
+  main.weight = 0.9;
+  SheetCrossing& c = r.crossings.emplace_back();
+  c.s_mm = 3 + 0.5 * col - 0.2 * row + 0.005 * col * col + 0.002 * col * row + 0.003 * row * row;
+  c.t_mm = -1 + 0.1 * col + 0.4 * row - 0.004 * col * col + 0.001 * col * row + 0.002 * row * row;
+  c.dst_dpixel << 0.5 + 0.01 * col + 0.002 * row, -0.2 + 0.002 * col + 0.006 * row,  //
+      0.1 - 0.008 * col + 0.001 * row, 0.4 + 0.001 * col + 0.004 * row;
+  c.weight = 0.04 + 0.001 * col;
+  c.tag = CrossingTag::with_reflections;
+  c.path = 1234;
+  c.subtree = 0;
+  r.background_weight = 0.06;
+  return r;
+}
+
+// Anchor rows of one cell at the origin, corner c's trace changed by `edit`.
+template <typename Edit>
+std::pair<AnchorRow, AnchorRow> cell_rows(int corner, Edit edit) {
+  AnchorRow top, bottom;
+  for (int i = 0; i < 4; ++i) {
+    TraceResult r = quadratic_anchor((i & 1) * kCellPx, (i >> 1) * kCellPx);
+    if (i == corner) edit(r);
+    (i < 2 ? top : bottom).add(&r, 1.0);
+  }
+  return {std::move(top), std::move(bottom)};
+}
+
+std::vector<std::uint64_t> agreeing(const std::pair<AnchorRow, AnchorRow>& rows, double tolerance = 0.1) {
+  GridTolerance tol;
+  tol.relative = tolerance;
+  tol.weight_floor = 1e-2;
+  std::vector<std::uint64_t> ids;
+  agreeing_subtrees(rows.first, rows.second, 0, kCellPx, tol, &ids);
+  return ids;
+}
+
+TEST(ReflectionGrid, AQuadraticSubtreeAgreesAndIsInterpolatedExactly) {
+  const auto rows = cell_rows(-1, [](TraceResult&) {});
+  ASSERT_EQ(agreeing(rows), std::vector<std::uint64_t>{77});
+  SubtreeCorners corners;
+  ASSERT_TRUE(subtree_corners(rows.first, rows.second, 0, 77, &corners));
+  for (double fx : {0.0, 0.5, 0.25})
+    for (double fy : {0.0, 0.5, 0.75}) {
+      std::vector<GridCrossing> out;
+      double background = 0, opaque = 0, cut = 0;
+      interpolate_subtree(corners, kCellPx, fx, fy, &out, &background, &opaque, &cut);
+      ASSERT_EQ(out.size(), 1u);
+      const double col = fx * kCellPx, row = fy * kCellPx;
+      // Float storage: |s|, |t| < 5 mm, so a few 1e-7 mm (a linear blend of
+      // the corners would miss by up to 0.005 mm here).
+      EXPECT_NEAR(out[0].s_mm, 3 + 0.5 * col - 0.2 * row + 0.005 * col * col + 0.002 * col * row + 0.003 * row * row,
+                  2e-6);
+      EXPECT_NEAR(out[0].t_mm, -1 + 0.1 * col + 0.4 * row - 0.004 * col * col + 0.001 * col * row + 0.002 * row * row,
+                  2e-6);
+      EXPECT_NEAR(out[0].weight, 0.04 + 0.001 * col, 1e-8);
+      EXPECT_NEAR(out[0].ds_drow, -0.2 + 0.002 * col + 0.006 * row, 1e-7);  // linear: the blend is exact
+      EXPECT_EQ(out[0].path, 1234u);
+      EXPECT_EQ(out[0].tag, static_cast<std::uint8_t>(CrossingTag::with_reflections));
+      EXPECT_NEAR(background, 0.01, 1e-8);
+    }
+}
+
+TEST(ReflectionGrid, ASubtreeThatDisagreesAnywhereIsTraced) {
+  for (int corner = 0; corner < 4; ++corner) {
+    SCOPED_TRACE(corner);
+    // Off by a fifth of a footprint (sqrt |det J| >= 0.469 mm): beyond 0.1 with
+    // the curvature's own miss (< 0.02 mm), within 0.25.
+    const auto moved = cell_rows(corner, [](TraceResult& r) { r.crossings[1].s_mm += 0.2 * 0.469; });
+    EXPECT_TRUE(agreeing(moved).empty());
+    EXPECT_EQ(agreeing(moved, 0.25).size(), 1u);
+    EXPECT_TRUE(agreeing(cell_rows(corner, [](TraceResult& r) { r.crossings[1].path = 99; })).empty());
+    EXPECT_TRUE(agreeing(cell_rows(corner, [](TraceResult& r) { r.crossings[1].weight *= 1.2; })).empty());
+    EXPECT_TRUE(agreeing(cell_rows(corner, [](TraceResult& r) { r.crossings.pop_back(); })).empty());
+    EXPECT_TRUE(agreeing(cell_rows(corner, [](TraceResult& r) { r.subtrees[0].id = 78; })).empty());
+    EXPECT_TRUE(agreeing(cell_rows(corner, [](TraceResult& r) { r.crossings[1].dst_dpixel *= 1.5; })).empty());
+    // Light that left the scene: within the cut-off's 1e-2 it agrees, beyond it not.
+    EXPECT_EQ(agreeing(cell_rows(corner, [](TraceResult& r) { r.subtrees[0].background_weight += 0.009; })).size(), 1u);
+    EXPECT_TRUE(agreeing(cell_rows(corner, [](TraceResult& r) { r.subtrees[0].background_weight += 0.02; })).empty());
+  }
+  // A corner whose ray could not be unprojected has no subtrees.
+  AnchorRow top, bottom;
+  const TraceResult r = quadratic_anchor(0, 0);
+  top.add(&r, 1.0);
+  top.add(nullptr, 1.0);
+  bottom.add(&r, 1.0);
+  bottom.add(&r, 1.0);
+  std::vector<std::uint64_t> ids;
+  agreeing_subtrees(top, bottom, 0, kCellPx, GridTolerance{}, &ids);
+  EXPECT_TRUE(ids.empty());
+  EXPECT_EQ(top.crossing_count(1), 0);
+  EXPECT_FALSE(top.met_solid(1));
+}
+
+// ---------------------------------------------------------------- maps
+
+// Pixel p's crossings as (s, t, weight, footprint), sorted.
+struct Crossing {
+  double s, t, w, footprint;
+  bool operator<(const Crossing& o) const { return std::tie(s, t, w) < std::tie(o.s, o.t, o.w); }
+};
+std::vector<Crossing> crossings_of(const TransportMap& m, std::size_t p) {
+  std::vector<Crossing> out;
+  for (std::uint32_t i = m.pixel_offsets[p]; i < m.pixel_offsets[p + 1]; ++i)
+    out.push_back({m.s_mm[i], m.t_mm[i], m.weight[i],
+                   std::sqrt(std::abs(m.ds_dcol[i] * m.dt_drow[i] - m.ds_drow[i] * m.dt_dcol[i]))});
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// The slab's ghosts (light reflected inside it, twice or more) are smooth in
+// the pixel: the grid interpolates them and lands where the tracer does.
+TEST(ReflectionGridMap, InterpolatedGhostsLandWhereTheTracerPutsThem) {
+  TraceScene scene = slab_and_sphere();
+  scene.solids.pop_back();  // the slab alone
+  TraceOptions options;
+  options.min_weight = 1e-4;
+  const TransportMap whole = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 2);
+  options.reflection_grid = 2;
+  const TransportMap grid = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 2);
+  EXPECT_GT(grid.stats.subtrees_interpolated, 500);
+  EXPECT_LT(grid.stats.branches_traced, whole.stats.branches_traced * 0.6);
+  ASSERT_EQ(grid.pixel_count(), whole.pixel_count());
+  double worst_position = 0, worst_weight = 0;
+  for (std::size_t p = 0; p < whole.pixel_count(); ++p) {
+    const std::vector<Crossing> a = crossings_of(whole, p), b = crossings_of(grid, p);
+    ASSERT_EQ(a.size(), b.size()) << "pixel " << p;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      worst_position = std::max(worst_position, std::hypot(a[i].s - b[i].s, a[i].t - b[i].t) / a[i].footprint);
+      worst_weight = std::max(worst_weight, std::abs(a[i].w - b[i].w) / a[i].w);
+    }
+    EXPECT_NEAR(grid.background_weight[p], whole.background_weight[p], 1e-6) << "pixel " << p;
+  }
+  // The slab's ghost positions are smooth but not affine in the pixel (the
+  // lateral shift grows with the angle): second-order terms over a 2 px cell,
+  // well inside the 0.1 footprint the agreement test allows.
+  EXPECT_LT(worst_position, 1e-2);
+  EXPECT_LT(worst_weight, 1e-3);
+  std::printf("slab ghosts interpolated: %ld subtrees, worst %.2e footprints, %.2e relative weight\n",
+              grid.stats.subtrees_interpolated, worst_position, worst_weight);
+}
+
+TEST(ReflectionGridMap, AnchorsAreTracedWholeAndTheResultIsTheSameOnAnyThreadCount) {
+  const TraceScene scene = slab_and_sphere();
+  TraceOptions options;
+  options.min_weight = 1e-4;
+  const TransportMap whole = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 1);
+  options.reflection_grid = 2;
+  const TransportMap one = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 1);
+  const TransportMap three = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 3);
+  expect_same_map_arrays(one, three);
+  EXPECT_EQ(one.stats.branches_traced, three.stats.branches_traced);
+  EXPECT_EQ(one.stats.subtrees_interpolated, three.stats.subtrees_interpolated);
+  for (int row = 0; row < whole.height; row += 2)
+    for (int col = 0; col < whole.width; col += 2) {
+      const std::size_t p = static_cast<std::size_t>(row) * whole.width + col;
+      ASSERT_EQ(one.pixel_offsets[p + 1] - one.pixel_offsets[p], whole.pixel_offsets[p + 1] - whole.pixel_offsets[p]);
+      for (std::uint32_t i = 0; i < whole.pixel_offsets[p + 1] - whole.pixel_offsets[p]; ++i) {
+        EXPECT_EQ(one.s_mm[one.pixel_offsets[p] + i], whole.s_mm[whole.pixel_offsets[p] + i]);
+        EXPECT_EQ(one.weight[one.pixel_offsets[p] + i], whole.weight[whole.pixel_offsets[p] + i]);
+      }
+      EXPECT_EQ(one.background_weight[p], whole.background_weight[p]);
+    }
+  // With two samples per axis the anchors are every other sample.
+  const TransportMap k2 = build_transport_map(scene, pinhole(), RigidTransform{}, options, 2, 2);
+  EXPECT_EQ(k2.stats.camera_rays, 4 * 40 * 30);
+  EXPECT_GT(k2.stats.subtrees_interpolated, 0);
+}
+
+TEST(ReflectionGridMap, WithoutReflectionsOrAGridTheMapIsTracedWhole) {
+  const TraceScene scene = slab_and_sphere();
+  TraceOptions options;
+  options.reflections = false;
+  const TransportMap plain = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 2);
+  options.reflection_grid = 4;
+  const TransportMap grid = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 2);
+  expect_same_map_arrays(plain, grid);
+  EXPECT_EQ(grid.stats.subtrees_interpolated, 0);
+  EXPECT_EQ(grid.stats.branches_traced, plain.stats.branches_traced);
+}
+
+TEST(ReflectionGridMap, BadOptionsAreRefused) {
+  const TraceScene scene = slab_and_sphere();
+  TraceOptions options;
+  options.reflection_grid = 0;
+  EXPECT_THROW(build_transport_map(scene, pinhole(), RigidTransform{}, options), std::invalid_argument);
+  options.reflection_grid = 2;
+  options.reflection_grid_tolerance = -0.1;
+  EXPECT_THROW(build_transport_map(scene, pinhole(), RigidTransform{}, options), std::invalid_argument);
+  options.reflection_grid_tolerance = std::nan("");
+  EXPECT_THROW(build_transport_map(scene, pinhole(), RigidTransform{}, options), std::invalid_argument);
+}
+
+// The packed bed: the grid's image against the image traced whole, on a
+// checkerboard sheet (0/1), and the light it keeps.
+TEST(ReflectionGridMap, ReactorImageStaysCloseToTheWholeTrace) {
+  const Scene scene = read_scene(std::string(GLASSPIV_SOURCE_DIR) + "/data/scenes/reactor.yaml");
+  const TraceScene ts = build_trace_scene(scene);
+  const Camera& camera = scene.cameras[0].camera;
+  const CameraModel cam = binned(camera.model, 8);  // 320 x 270 px over the whole view
+  TraceOptions options;
+  const TransportMap whole = build_transport_map(ts, cam, *camera.camera_from_world, options, 1, 2);
+  options.reflection_grid = 2;
+  const TransportMap grid = build_transport_map(ts, cam, *camera.camera_from_world, options, 1, 2);
+  EXPECT_GT(grid.stats.subtrees_interpolated, 10000);
+  EXPECT_LT(grid.stats.branches_traced, whole.stats.branches_traced * 0.9);
+  const double mm = 5;
+  auto checker = [mm](double s, double t) {
+    return static_cast<double>((static_cast<long>(std::floor(s / mm)) + static_cast<long>(std::floor(t / mm))) & 1);
+  };
+  const std::vector<float> a = forward_render_values(whole, checker), b = forward_render_values(grid, checker);
+  double sum = 0, worst = 0, light_a = 0, light_b = 0;
+  for (std::size_t p = 0; p < a.size(); ++p) {
+    sum += (a[p] - b[p]) * (a[p] - b[p]);
+    worst = std::max(worst, static_cast<double>(std::abs(a[p] - b[p])));
+  }
+  for (float w : whole.weight) light_a += w;
+  for (float w : grid.weight) light_b += w;
+  const double rms = std::sqrt(sum / a.size());
+  // Point samples of a 0/1 checkerboard: a ghost crossing moved across an
+  // edge changes its pixel by its weight (a few 1e-2), so the largest
+  // difference is one ghost's weight; the RMS stays far below the 1-sample
+  // render's own error against a converged one (0.02-0.03, bench/RESULTS.md).
+  EXPECT_LT(rms, 2e-3);
+  EXPECT_LT(worst, 0.1);
+  EXPECT_NEAR(light_b / light_a, 1, 2e-3);
+  std::printf("reactor 320x270: branches %ld -> %ld, image RMS difference %.2e, largest %.3f\n",
+              whole.stats.branches_traced, grid.stats.branches_traced, rms, worst);
+}
+
+}  // namespace
+}  // namespace glasspiv
