@@ -30,7 +30,9 @@
 // glasspiv: build_transport_map with TraceOptions{reflections = false} and with
 // the default options (reflections on, min_weight 1e-2), and with the
 // correction's (correct/correction_defaults.h: reflections on, min_weight 0.1,
-// what glasspiv correct traces); segments =
+// what glasspiv correct traces), and the default with the reflection grid 2
+// (the same map with its agreeing reflected subtrees interpolated: fewer
+// segments, so compare its s per MP, not its rate); segments =
 // map.stats.branches_traced (its closed-form camera rays and its in-glass
 // segments need no BVH query but count as segments).
 #include <embree3/rtcore.h>
@@ -394,6 +396,8 @@ int main(int argc, char** argv) {
   refraction_only.reflections = false;
   const TraceOptions defaults;
   const TraceOptions correction = correction_trace_options();  // glasspiv correct's maps: reflections, cut at 0.1
+  TraceOptions grid = defaults;  // the default's map with its reflected subtrees interpolated where they agree
+  grid.reflection_grid = 2;
 
   struct Run {
     double seconds = 0;
@@ -402,11 +406,11 @@ int main(int argc, char** argv) {
     double mseg_per_s() const { return segments / seconds / 1e6; }
     double mseg_per_cpu_s() const { return segments / cpu_s / 1e6; }
   };
-  std::vector<Run> bare_runs, refr_runs, def_runs, corr_runs, camera_ray_runs;
+  std::vector<Run> bare_runs, refr_runs, def_runs, corr_runs, grid_runs, camera_ray_runs;
   double camera_ray_checksum = 0;
   BareCounts bare_counts;
-  TransportStats refr_stats, def_stats, corr_stats;
-  double refr_map_mib = 0, def_map_mib = 0, corr_map_mib = 0;
+  TransportStats refr_stats, def_stats, corr_stats, grid_stats;
+  double refr_map_mib = 0, def_map_mib = 0, corr_map_mib = 0, grid_map_mib = 0;
   const double rss_before_maps = peak_rss_mib();
 
   // One glasspiv map build, timed (wall and process CPU), its stats and size kept.
@@ -437,6 +441,7 @@ int main(int argc, char** argv) {
     trace_map(refraction_only, &refr_runs, &refr_stats, &refr_map_mib);
     trace_map(defaults, &def_runs, &def_stats, &def_map_mib);
     trace_map(correction, &corr_runs, &corr_stats, &corr_map_mib);
+    trace_map(grid, &grid_runs, &grid_stats, &grid_map_mib);
     const Run& b = bare_runs.back();
     const Run& r = refr_runs.back();
     const Run& d = def_runs.back();
@@ -453,6 +458,7 @@ int main(int argc, char** argv) {
     row("refraction only", r);
     row("default (reflections, min_weight 1e-2)", d);
     row("correction default (reflections, min_weight 0.1)", c);
+    row("default with reflection grid 2 (the default's map, fewer segments)", grid_runs.back());
     std::fflush(stdout);
   }
 
@@ -511,8 +517,8 @@ int main(int argc, char** argv) {
                            [&](const Run& g, const Run& b, const Run&) { return g.seconds / mp * (b.mseg_per_s() / 17.0); });
   };
   std::printf("\ns per MP scaled to a bare tracer at 17 M segments/s (glasspiv s/MP x bare M seg/s / 17, per rep, "
-              "median): default %.3f, correction default %.3f\n",
-              scaled(def_runs), scaled(corr_runs));
+              "median): default %.3f, correction default %.3f, default with reflection grid 2 %.3f\n",
+              scaled(def_runs), scaled(corr_runs), scaled(grid_runs));
   {
     // glasspiv unprojects every pixel inside its timed build; the bare time does not.
     const double with_rays = med(bare_runs, secs) + ray_s;
@@ -542,6 +548,10 @@ int main(int argc, char** argv) {
               corr_stats.camera_rays, corr_stats.branches_traced,
               double(corr_stats.branches_traced) / corr_stats.camera_rays, corr_stats.branches_cut_by_weight,
               corr_stats.branches_cut_by_depth, corr_stats.crossings, corr_map_mib);
+  std::printf("  glasspiv default with reflection grid 2: %ld segments (%.3f per ray), %ld subtrees interpolated, %ld "
+              "crossings; map %.1f MiB\n",
+              grid_stats.branches_traced, double(grid_stats.branches_traced) / grid_stats.camera_rays,
+              grid_stats.subtrees_interpolated, grid_stats.crossings, grid_map_mib);
   std::printf("  bare vs glasspiv refraction-only segments: %+.4f %%\n",
               100.0 * (double(bare_counts.segments) - refr_stats.branches_traced) / refr_stats.branches_traced);
   std::printf("maps: refraction only %.1f MiB, default %.1f MiB (TransportMap::memory_bytes); peak RSS %.1f MiB "

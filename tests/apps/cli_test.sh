@@ -83,7 +83,7 @@ expect_error 2 "frobnicate" "not a command" -- "$glasspiv" frobnicate --help
 expect_error 2 "frobnicate" "glasspiv camera" -- "$glasspiv" camera frobnicate --help
 "$glasspiv" camera show --help | grep -q "^Usage: glasspiv camera show " && ok || fail "usage line does not read 'glasspiv camera show'"
 # Every option with a default shows it in --help.
-for pair in "render:--min-weight" "render:--min-weight-reflected" "render:--max-depth" "render:--pattern-mm" "render:--gain" "camera show:--step-px" \
+for pair in "render:--min-weight" "render:--min-weight-reflected" "render:--reflection-grid" "render:--reflection-grid-tolerance" "render:--max-depth" "render:--pattern-mm" "render:--gain" "camera show:--step-px" \
   "camera compare:--step-px" "camera compare:--distance-mm" "correct:--min-weight" "coverage:--min-pixels"; do
   # shellcheck disable=SC2086
   "$glasspiv" ${pair%%:*} --help | grep -qE -- "${pair#*:} .*=[0-9]" && ok || fail "glasspiv ${pair%%:*} --help shows no default of ${pair#*:}"
@@ -166,6 +166,13 @@ expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work
 grep -q "nothing re-traced" "$work/out" && ok || fail "a reflected cut-off below --min-weight re-traced: $(cat "$work/out")"
 expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/lens4.png" --map "$work/lens4.tmap" --min-weight-reflected 0.5
 grep -q "another setup" "$work/out" && ok || fail "a reflected cut-off above --min-weight reused the map: $(cat "$work/out")"
+# The reflection grid traces another map, and says what it interpolated.
+expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/lens5.png" --map "$work/lens5.tmap" --reflection-grid 1
+expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/lens5.png" --map "$work/lens5.tmap" --reflection-grid 2
+grep -q "another setup" "$work/out" && grep -q "reflection grid 2: [0-9]* reflected subtrees interpolated" "$work/out" \
+  && ok || fail "--reflection-grid 2 reused the map or did not report: $(cat "$work/out")"
+expect_error 2 "--reflection-grid" -- "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/x.tif" --reflection-grid 0
+expect_error 2 "--reflection-grid-tolerance" -- "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/x.tif" --reflection-grid-tolerance -1
 expect_ok "$glasspiv" render "$work/lens.yaml" --setup -o "$work/setup.png" --format 8 --background 1
 [ -s "$work/setup.png" ] && ok || fail "render --setup wrote nothing"
 cat "$work/lens.yaml" - >"$work/two.yaml" <<'YAML'
