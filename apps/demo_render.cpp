@@ -23,6 +23,7 @@ DemoRenderSummary run_render_demo(const std::string& folder, const std::string& 
   const RigidTransform& pose = *ps.camera().camera_from_world;
   TraceOptions options;
   options.min_weight = 1e-2;  // bench/RESULTS.md: the error it adds is far below the 1-sample aliasing
+  options.reflection_grid = 2;  // as glasspiv render: ghosts interpolated where they agree
 
   DemoRenderSummary s;
   s.width = model.width_px();

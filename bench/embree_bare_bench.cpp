@@ -458,7 +458,7 @@ int main(int argc, char** argv) {
     row("refraction only", r);
     row("default (reflections, min_weight 1e-2)", d);
     row("correction default (reflections, min_weight 0.1)", c);
-    row("default with reflection grid 2 (the default's map, fewer segments)", grid_runs.back());
+    row("render default: reflection grid 2 (the default's map, fewer segments)", grid_runs.back());
     std::fflush(stdout);
   }
 

@@ -5,7 +5,6 @@
 #endif
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -302,55 +301,70 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
   }
   const SampleLattice lattice(camera.width_px(), height, k, options.reflection_grid);
   const int anchor_rows = lattice.anchors_y;
-  // Progress over the two tracing passes together, rows of either counted alike.
-  const auto report = [&](int offset) -> std::function<void(int, int)> {
-    if (!progress) return {};
-    return [&progress, offset, total = anchor_rows + height](int done, int) { progress(offset + done, total); };
-  };
   std::vector<AnchorRow> anchors(static_cast<std::size_t>(anchor_rows));
-  anchor_stats->assign(static_cast<std::size_t>(anchor_rows), RowStats{});
-  parallel_rows(
-      anchor_rows, *threads,
-      [&](int ay) {
-        trace_anchor_row(scene, index, camera, camera_from_world, options, lattice, ay,
-                         &anchors[static_cast<std::size_t>(ay)], &(*anchor_stats)[static_cast<std::size_t>(ay)]);
-      },
-      report(0));
   std::vector<CellRow> cells(static_cast<std::size_t>(anchor_rows));
+  anchor_stats->assign(static_cast<std::size_t>(anchor_rows), RowStats{});
   const double cell_px = static_cast<double>(lattice.g) / k;
   GridTolerance tolerance;
   tolerance.relative = options.reflection_grid_tolerance;
   tolerance.weight_floor = options.min_weight / (static_cast<double>(k) * k);
-  parallel_rows(lattice.cells_y(), *threads, [&](int cy) {
-    CellRow& cr = cells[static_cast<std::size_t>(cy)];
-    cr.begin.push_back(0);
-    for (int cx = 0; cx < lattice.cells_x(); ++cx) {
-      agreeing_subtrees(anchors[static_cast<std::size_t>(cy)], anchors[static_cast<std::size_t>(cy) + 1], cx, cell_px,
-                        tolerance, &cr.ids);
-      cr.begin.push_back(static_cast<std::uint32_t>(cr.ids.size()));
+  // Progress in pixel rows, as without the grid: anchor rows and pixel rows
+  // counted alike and scaled to the image's rows.
+  int reported = 0;
+  const auto report = [&]() -> std::function<void(int, int)> {
+    if (!progress) return {};
+    return [&progress, &reported, height, total = static_cast<long>(anchor_rows) + height](int done, int) {
+      progress(static_cast<int>((reported + done) * static_cast<long>(height) / total), height);
+    };
+  };
+  const int requested_threads = *threads;
+  *threads = 0;
+  // A band of pixel rows at a time: its anchor rows traced, their cells
+  // compared, its rows traced, and the anchor rows no later band reads freed,
+  // so that the anchors never all wait beside the finished rows.
+  constexpr int kBandRows = 64;
+  int anchors_traced = 0, cells_compared = 0, anchors_freed = 0;
+  for (int first_row = 0; first_row < height; first_row += kBandRows) {
+    const int end_row = std::min(height, first_row + kBandRows);
+    const int anchors_needed = anchor_rows_of(lattice, end_row - 1).second + 1;
+    const int first_anchor = anchors_traced;
+    parallel_rows(
+        anchors_needed - first_anchor, requested_threads,
+        [&](int i) {
+          const auto ay = static_cast<std::size_t>(first_anchor + i);
+          trace_anchor_row(scene, index, camera, camera_from_world, options, lattice, first_anchor + i, &anchors[ay],
+                           &(*anchor_stats)[ay]);
+        },
+        report());
+    reported += anchors_needed - first_anchor;
+    anchors_traced = anchors_needed;
+    const int first_cell = cells_compared, cells_end = std::min(anchors_needed - 1, lattice.cells_y());
+    parallel_rows(std::max(cells_end - first_cell, 0), requested_threads, [&](int i) {
+      const int cy = first_cell + i;
+      CellRow& cr = cells[static_cast<std::size_t>(cy)];
+      cr.begin.push_back(0);
+      for (int cx = 0; cx < lattice.cells_x(); ++cx) {
+        agreeing_subtrees(anchors[static_cast<std::size_t>(cy)], anchors[static_cast<std::size_t>(cy) + 1], cx,
+                          cell_px, tolerance, &cr.ids);
+        cr.begin.push_back(static_cast<std::uint32_t>(cr.ids.size()));
+      }
+    });
+    cells_compared = std::max(cells_end, first_cell);
+    *threads = std::max(*threads, parallel_rows(
+                                      end_row - first_row, requested_threads,
+                                      [&](int i) {
+                                        trace_row_on_grid(scene, index, camera, camera_from_world, options, lattice,
+                                                          anchors, cells, first_row + i,
+                                                          &rows[static_cast<std::size_t>(first_row + i)]);
+                                      },
+                                      report()));
+    reported += end_row - first_row;
+    const int still_read = end_row < height ? anchor_rows_of(lattice, end_row).first : anchor_rows;
+    for (; anchors_freed < still_read; ++anchors_freed) {
+      anchors[static_cast<std::size_t>(anchors_freed)] = AnchorRow{};
+      cells[static_cast<std::size_t>(anchors_freed)] = CellRow{};
     }
-  });
-  // Anchor row a (and cell row a, whose samples all read it) is freed when the
-  // last pixel row that reads it is done: the anchors never all wait beside
-  // the finished rows.
-  std::vector<std::atomic<int>> readers(static_cast<std::size_t>(anchor_rows));
-  for (int row = 0; row < height; ++row) {
-    const auto [first, last] = anchor_rows_of(lattice, row);
-    for (int a = first; a <= last; ++a) ++readers[static_cast<std::size_t>(a)];
   }
-  *threads = parallel_rows(
-      height, *threads,
-      [&](int row) {
-        trace_row_on_grid(scene, index, camera, camera_from_world, options, lattice, anchors, cells, row,
-                          &rows[static_cast<std::size_t>(row)]);
-        const auto [first, last] = anchor_rows_of(lattice, row);
-        for (int a = first; a <= last; ++a)
-          if (readers[static_cast<std::size_t>(a)].fetch_sub(1, std::memory_order_acq_rel) == 1) {
-            anchors[static_cast<std::size_t>(a)] = AnchorRow{};
-            cells[static_cast<std::size_t>(a)] = CellRow{};
-          }
-      },
-      report(anchor_rows));
   return rows;
 }
 

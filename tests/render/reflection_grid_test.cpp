@@ -240,16 +240,20 @@ std::vector<Crossing> crossings_of(const TransportMap& m, std::size_t p) {
 }
 
 // The slab's ghosts (light reflected inside it, twice or more) are smooth in
-// the pixel: the grid interpolates them and lands where the tracer does.
+// the pixel: the grid interpolates them and lands where the tracer does. A
+// camera 150 rows tall: the map is built in bands of 64 rows.
 TEST(ReflectionGridMap, InterpolatedGhostsLandWhereTheTracerPutsThem) {
+  for (int k : {1, 2}) {
+  SCOPED_TRACE(k);
   TraceScene scene = slab_and_sphere();
   scene.solids.pop_back();  // the slab alone
+  const CameraModel cam(40, 150, 120.0, 110.0, 19.3, 74.6);
   TraceOptions options;
   options.min_weight = 1e-4;
-  const TransportMap whole = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 2);
+  const TransportMap whole = build_transport_map(scene, cam, RigidTransform{}, options, k, 2);
   options.reflection_grid = 2;
-  const TransportMap grid = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 2);
-  EXPECT_GT(grid.stats.subtrees_interpolated, 500);
+  const TransportMap grid = build_transport_map(scene, cam, RigidTransform{}, options, k, 2);
+  EXPECT_GT(grid.stats.subtrees_interpolated, 2000 * k * k);
   EXPECT_LT(grid.stats.branches_traced, whole.stats.branches_traced * 0.6);
   ASSERT_EQ(grid.pixel_count(), whole.pixel_count());
   double worst_position = 0, worst_weight = 0;
@@ -260,15 +264,18 @@ TEST(ReflectionGridMap, InterpolatedGhostsLandWhereTheTracerPutsThem) {
       worst_position = std::max(worst_position, std::hypot(a[i].s - b[i].s, a[i].t - b[i].t) / a[i].footprint);
       worst_weight = std::max(worst_weight, std::abs(a[i].w - b[i].w) / a[i].w);
     }
-    EXPECT_NEAR(grid.background_weight[p], whole.background_weight[p], 1e-6) << "pixel " << p;
+    // Weights are blended bilinearly: the Fresnel weights' curvature over a
+    // 2 px cell leaves a few 1e-6 at the steep edges of this view.
+    EXPECT_NEAR(grid.background_weight[p], whole.background_weight[p], 1e-5) << "pixel " << p;
   }
   // The slab's ghost positions are smooth but not affine in the pixel (the
   // lateral shift grows with the angle): second-order terms over a 2 px cell,
   // well inside the 0.1 footprint the agreement test allows.
   EXPECT_LT(worst_position, 1e-2);
   EXPECT_LT(worst_weight, 1e-3);
-  std::printf("slab ghosts interpolated: %ld subtrees, worst %.2e footprints, %.2e relative weight\n",
-              grid.stats.subtrees_interpolated, worst_position, worst_weight);
+  std::printf("slab ghosts, %d x %d samples: %ld subtrees interpolated, worst %.2e footprints, %.2e relative weight\n",
+              k, k, grid.stats.subtrees_interpolated, worst_position, worst_weight);
+  }
 }
 
 TEST(ReflectionGridMap, AnchorsAreTracedWholeAndTheResultIsTheSameOnAnyThreadCount) {
@@ -308,6 +315,25 @@ TEST(ReflectionGridMap, WithoutReflectionsOrAGridTheMapIsTracedWhole) {
   expect_same_map_arrays(plain, grid);
   EXPECT_EQ(grid.stats.subtrees_interpolated, 0);
   EXPECT_EQ(grid.stats.branches_traced, plain.stats.branches_traced);
+}
+
+TEST(ReflectionGridMap, ProgressCountsPixelRowsUpToTheImagesHeight) {
+  const TraceScene scene = slab_and_sphere();
+  const CameraModel cam(40, 150, 120.0, 110.0, 19.3, 74.6);
+  TraceOptions options;
+  options.reflection_grid = 2;
+  int last = -1, calls = 0;
+  bool in_range = true, monotonic = true;
+  build_transport_map(scene, cam, RigidTransform{}, options, 1, 2, [&](int done, int rows) {
+    in_range = in_range && rows == 150 && done >= 0 && done <= rows;
+    monotonic = monotonic && done >= last;
+    last = done;
+    ++calls;
+  });
+  EXPECT_TRUE(in_range);
+  EXPECT_TRUE(monotonic);
+  EXPECT_EQ(last, 150);
+  EXPECT_GE(calls, 2);
 }
 
 TEST(ReflectionGridMap, BadOptionsAreRefused) {
