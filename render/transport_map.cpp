@@ -257,7 +257,9 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
         double cut = 0;
         for (std::uint64_t id : r.deferred) {
           SubtreeCorners corners;
-          subtree_corners(top, bottom, cx, id, &corners);  // found: the cell's agreeing subtrees are in all four
+          // Always found: a deferred id is one of the cell's agreeing subtrees,
+          // which all four anchors hold.
+          if (!subtree_corners(top, bottom, cx, id, &corners)) continue;
           interpolate_subtree(corners, cell_px, static_cast<double>(x % g) / g, static_cast<double>(y % g) / g,
                               &interpolated, &background, &opaque, &cut);
         }
