@@ -213,8 +213,11 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
     }
     return true;
   };
-  auto is_deferred = [&](std::uint64_t id) {
-    return std::find(deferred.ids, deferred.ids + deferred.count, id) != deferred.ids + deferred.count;
+  auto is_deferred = [&](std::uint64_t id, double weight) {
+    const std::uint64_t* found = std::find(deferred.ids, deferred.ids + deferred.count, id);
+    if (found == deferred.ids + deferred.count) return false;
+    const std::size_t i = static_cast<std::size_t>(found - deferred.ids);
+    return weight >= deferred.min_weight[i] && weight <= deferred.max_weight[i];
   };
 
   while (true) {
@@ -351,7 +354,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
       }
     } else {
       const std::uint64_t r_path = extend_path(b.path, hit->shape_index, true);
-      if (b.subtree < 0 && deferred.count > 0 && w_reflected > 0 && is_deferred(r_path)) {
+      if (b.subtree < 0 && deferred.count > 0 && w_reflected > 0 && is_deferred(r_path, w_reflected)) {
         result.deferred.push_back(r_path);
         result.deferred_weight += w_reflected;
       } else if (admit(w_reflected, b.depth + 1, true, b.subtree)) {

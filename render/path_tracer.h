@@ -139,9 +139,14 @@ struct ReflectedSubtree {
 };
 
 // Subtrees (ReflectedSubtree::id) the caller provides otherwise: trace_ray
-// does not spawn them and lists the ones it met in TraceResult::deferred.
+// does not spawn subtree ids[i] where its weight at the reflection lies in
+// [min_weight[i], max_weight[i]] (where it does not, say a total internal
+// reflection where the caller's subtrees were partial ones, it is traced),
+// and lists the ones it deferred in TraceResult::deferred.
 struct DeferredSubtrees {
   const std::uint64_t* ids = nullptr;
+  const double* min_weight = nullptr;
+  const double* max_weight = nullptr;
   std::size_t count = 0;
 };
 

@@ -27,6 +27,7 @@ void AnchorRow::add(const TraceResult* r, double scale) {
     for (const ReflectedSubtree& st : r->subtrees) {
       SubtreeRecord& rec = subtrees_.emplace_back();
       rec.id = st.id;
+      rec.weight = static_cast<float>(st.weight);
       rec.background = static_cast<float>(st.background_weight * scale);
       rec.opaque = static_cast<float>(st.opaque_weight * scale);
       rec.cut = static_cast<float>(st.cut_weight * scale);
@@ -116,6 +117,7 @@ bool subtree_agrees(const SubtreeCorners& corners, double cell_px, const GridTol
     if (r->count != count) return false;
   for (const Edge& e : kEdges) {
     const SubtreeRecord &ra = *corners.record[e.a], &rb = *corners.record[e.b];
+    if (!weights_close(ra.weight, rb.weight, tolerance.relative, 0)) return false;
     if (!weights_close(ra.background, rb.background, tolerance.relative, tolerance.weight_floor) ||
         !weights_close(ra.opaque, rb.opaque, tolerance.relative, tolerance.weight_floor))
       return false;
@@ -131,12 +133,20 @@ bool subtree_agrees(const SubtreeCorners& corners, double cell_px, const GridTol
 }
 
 void agreeing_subtrees(const AnchorRow& top, const AnchorRow& bottom, int col, double cell_px,
-                       const GridTolerance& tolerance, std::vector<std::uint64_t>* ids) {
+                       const GridTolerance& tolerance, AgreeingSubtrees* out) {
   const SubtreeRecord* own = top.subtrees(col);
   for (int j = 0; j < top.subtree_count(col); ++j) {
     SubtreeCorners corners;
-    if (subtree_corners(top, bottom, col, own[j].id, &corners) && subtree_agrees(corners, cell_px, tolerance))
-      ids->push_back(own[j].id);
+    if (!subtree_corners(top, bottom, col, own[j].id, &corners) || !subtree_agrees(corners, cell_px, tolerance))
+      continue;
+    double lo = corners.record[0]->weight, hi = lo;
+    for (const SubtreeRecord* r : corners.record) {
+      lo = std::min(lo, static_cast<double>(r->weight));
+      hi = std::max(hi, static_cast<double>(r->weight));
+    }
+    out->ids.push_back(own[j].id);
+    out->min_weight.push_back(lo * (1 - tolerance.relative));
+    out->max_weight.push_back(hi * (1 + tolerance.relative));
   }
 }
 

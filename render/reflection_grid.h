@@ -9,13 +9,15 @@
 // from them, interpolated; the others it traces.
 //
 // A subtree agrees in a cell when all four anchors have it (the same id: their
-// refracted chains met the same surfaces up to its reflection) with the same
+// refracted chains met the same surfaces up to its reflection), with weights
+// at the reflection within `tolerance` relative, and with the same
 // crossings (the same paths, in the same order), each anchor's crossing
 // predicted from its edge neighbour's position and footprint Jacobian to
 // within `tolerance` of a footprint (the square root of |det J|, the smaller
 // of the two), each crossing's weight equal to within `tolerance` relative,
 // and the subtree's light that left the scene or ended on opaque solids equal
-// to within `tolerance` relative or within the cut-off (min_weight): those
+// to within `tolerance` relative or within the cut-off of reflected light
+// (GridTolerance::weight_floor): those
 // sums jump by a cut branch's weight where a branch near the cut-off is
 // followed at one anchor and cut at the next, which the tracer's cut-off
 // already allows for.
@@ -42,6 +44,7 @@ GridCrossing grid_crossing(const SheetCrossing& c, double scale);
 // One reflected subtree of an anchor (weights in the map's units).
 struct SubtreeRecord {
   std::uint64_t id = 0;
+  float weight = 0;                  // at the reflection, of the camera ray's unit weight
   float background = 0, opaque = 0;  // its light that left the scene / ended on opaque solids
   float cut = 0;                     // its light cut by weight or depth (statistics only)
   std::uint32_t first = 0, count = 0;  // its crossings among the anchor's
@@ -90,17 +93,27 @@ bool subtree_corners(const AnchorRow& top, const AnchorRow& bottom, int col, std
 // How closely a subtree must agree among the anchors (see the top).
 struct GridTolerance {
   double relative = 0.1;    // of a footprint; of a weight
-  double weight_floor = 0;  // the cut-off in the map's units (min_weight / samples^2)
+  double weight_floor = 0;  // the reflected light's cut-off in the map's units
+                            // (max(min_weight, min_weight_reflected) / samples^2)
 };
 
 // Whether the subtree may be interpolated in the cell (see the top); cell_px:
 // the cell's side in pixels (g / samples_per_axis).
 bool subtree_agrees(const SubtreeCorners& corners, double cell_px, const GridTolerance& tolerance);
 
-// The ids of the subtrees that agree in the cell of top-left anchor `col`, in
-// the order of its top-left anchor's; appended to *ids.
+// Subtrees that agree, each with the range of its weight at the reflection
+// over the four anchors, widened by the tolerance: what a sample may defer
+// (DeferredSubtrees); a sample whose own reflection falls outside (a total
+// internal reflection where the anchors' were partial) traces it.
+struct AgreeingSubtrees {
+  std::vector<std::uint64_t> ids;
+  std::vector<double> min_weight, max_weight;
+};
+
+// The subtrees that agree in the cell of top-left anchor `col`, in the order
+// of its top-left anchor's; appended to *out.
 void agreeing_subtrees(const AnchorRow& top, const AnchorRow& bottom, int col, double cell_px,
-                       const GridTolerance& tolerance, std::vector<std::uint64_t>* ids);
+                       const GridTolerance& tolerance, AgreeingSubtrees* out);
 
 // The subtree at the point (fx, fy) in [0, 1]^2 of the cell: each crossing's
 // position interpolated from the corners' positions and footprint Jacobians

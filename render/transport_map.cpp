@@ -5,6 +5,7 @@
 #endif
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -186,7 +187,7 @@ void trace_anchor_row(const TraceScene& scene, const SceneIndex& index, const Ca
 // The subtrees that agree in each cell of one cell row (CSR over its cells).
 struct CellRow {
   std::vector<std::uint32_t> begin;  // cells_x + 1
-  std::vector<std::uint64_t> ids;
+  AgreeingSubtrees agreeing;
 };
 
 // A pixel row with the reflection grid: anchors from their rows; every other
@@ -241,8 +242,11 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
         const int cx = x / g, cy = y / g;
         if (lattice.cell(x, y) >= 0) {
           const CellRow& cr = cells[static_cast<std::size_t>(cy)];
-          deferred.ids = cr.ids.data() + cr.begin[static_cast<std::size_t>(cx)];
-          deferred.count = cr.begin[static_cast<std::size_t>(cx) + 1] - cr.begin[static_cast<std::size_t>(cx)];
+          const std::uint32_t first = cr.begin[static_cast<std::size_t>(cx)];
+          deferred.ids = cr.agreeing.ids.data() + first;
+          deferred.min_weight = cr.agreeing.min_weight.data() + first;
+          deferred.max_weight = cr.agreeing.max_weight.data() + first;
+          deferred.count = cr.begin[static_cast<std::size_t>(cx) + 1] - first;
         }
         trace_ray(scene, index, *ray, options, &r, deferred);
         out->stats.add(r, inv_samples);
@@ -259,7 +263,9 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
           SubtreeCorners corners;
           // Always found: a deferred id is one of the cell's agreeing subtrees,
           // which all four anchors hold.
-          if (!subtree_corners(top, bottom, cx, id, &corners)) continue;
+          const bool found = subtree_corners(top, bottom, cx, id, &corners);
+          assert(found);
+          if (!found) continue;
           interpolate_subtree(corners, cell_px, static_cast<double>(x % g) / g, static_cast<double>(y % g) / g,
                               &interpolated, &background, &opaque, &cut);
         }
@@ -309,7 +315,8 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
   const double cell_px = static_cast<double>(lattice.g) / k;
   GridTolerance tolerance;
   tolerance.relative = options.reflection_grid_tolerance;
-  tolerance.weight_floor = options.min_weight / (static_cast<double>(k) * k);
+  // Every branch of a subtree has been reflected: cut at the reflected cut-off.
+  tolerance.weight_floor = std::max(options.min_weight, options.min_weight_reflected) / (static_cast<double>(k) * k);
   // Progress in pixel rows, as without the grid: anchor rows and pixel rows
   // counted alike and scaled to the image's rows.
   int reported = 0;
@@ -347,8 +354,8 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
       cr.begin.push_back(0);
       for (int cx = 0; cx < lattice.cells_x(); ++cx) {
         agreeing_subtrees(anchors[static_cast<std::size_t>(cy)], anchors[static_cast<std::size_t>(cy) + 1], cx,
-                          cell_px, tolerance, &cr.ids);
-        cr.begin.push_back(static_cast<std::uint32_t>(cr.ids.size()));
+                          cell_px, tolerance, &cr.agreeing);
+        cr.begin.push_back(static_cast<std::uint32_t>(cr.agreeing.ids.size()));
       }
     });
     cells_compared = std::max(cells_end, first_cell);
