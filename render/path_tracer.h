@@ -167,6 +167,9 @@ struct TraceResult {
   std::vector<std::uint64_t> deferred;     // ids of the DeferredSubtrees met, in order
   double deferred_weight = 0;              // their weight
 
+  // Whether the ray met any solid (a segment after the first, or an opaque end).
+  bool met_solid() const { return counts.branches_traced > 1 || !opaque_hits.empty(); }
+
   double terminal_weight_sum() const {
     return background_weight + opaque_weight + absorbed_weight + cut_by_weight_weight + cut_by_depth_weight +
            skipped_reflection_weight + deferred_weight;

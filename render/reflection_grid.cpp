@@ -60,7 +60,7 @@ void AnchorRow::add(const TraceResult* r, double scale) {
   subtree_begin_.push_back(static_cast<std::uint32_t>(subtrees_.size()));
   background_.push_back(background);
   opaque_.push_back(opaque);
-  met_solid_.push_back(r && (r->counts.branches_traced > 1 || !r->opaque_hits.empty()));
+  met_solid_.push_back(r && r->met_solid());
 }
 
 const SubtreeRecord* AnchorRow::find_subtree(int i, std::uint64_t id) const {
@@ -145,6 +145,7 @@ void agreeing_subtrees(const AnchorRow& top, const AnchorRow& bottom, int col, d
       hi = std::max(hi, static_cast<double>(r->weight));
     }
     out->ids.push_back(own[j].id);
+    out->corners.push_back(corners);
     out->min_weight.push_back(lo * (1 - tolerance.relative));
     out->max_weight.push_back(hi * (1 + tolerance.relative));
   }

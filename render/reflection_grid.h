@@ -104,10 +104,13 @@ bool subtree_agrees(const SubtreeCorners& corners, double cell_px, const GridTol
 // Subtrees that agree, each with the range of its weight at the reflection
 // over the four anchors, widened by the tolerance: what a sample may defer
 // (DeferredSubtrees); a sample whose own reflection falls outside (a total
-// internal reflection where the anchors' were partial) traces it.
+// internal reflection where the anchors' were partial) traces it. corners:
+// where each lies in the anchor rows, for interpolate_subtree (valid while
+// they live).
 struct AgreeingSubtrees {
   std::vector<std::uint64_t> ids;
   std::vector<double> min_weight, max_weight;
+  std::vector<SubtreeCorners> corners;
 };
 
 // The subtrees that agree in the cell of top-left anchor `col`, in the order

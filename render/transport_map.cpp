@@ -68,6 +68,12 @@ struct RowBuffer {
     for (auto* v : {&s, &t, &w, &ds_dcol, &ds_drow, &dt_dcol, &dt_drow}) v->clear();
     tag.clear();
   }
+  // The per-pixel arrays of a row `width` pixels wide, zeroed.
+  void start_row(int width) {
+    counts.assign(static_cast<std::size_t>(width), 0);
+    background.assign(static_cast<std::size_t>(width), 0.0f);
+    opaque.assign(static_cast<std::size_t>(width), 0.0f);
+  }
   void push(const GridCrossing& c) {
     s.push_back(c.s_mm);
     t.push_back(c.t_mm);
@@ -92,6 +98,34 @@ struct RowBuffer {
   }
 };
 
+// One pixel's sums over its samples, appending their crossings to a row's
+// scratch buffer.
+struct PixelSums {
+  bool any_hit = false;
+  double background = 0, opaque = 0;
+  std::uint32_t count = 0;
+
+  // A traced sample, weights times scale.
+  void add_traced(const TraceResult& r, double scale, RowBuffer* scratch) {
+    any_hit = any_hit || r.met_solid();
+    for (const SheetCrossing& c : r.crossings) scratch->push(grid_crossing(c, scale));
+    count += static_cast<std::uint32_t>(r.crossings.size());
+    background += r.background_weight * scale;
+    opaque += r.opaque_weight * scale;
+  }
+  void add_crossings(const GridCrossing* c, std::size_t n, RowBuffer* scratch) {
+    for (std::size_t i = 0; i < n; ++i) scratch->push(c[i]);
+    count += static_cast<std::uint32_t>(n);
+  }
+  // The pixel's entry in the row, `col`.
+  void store(int col, RowBuffer* out) const {
+    if (!any_hit) ++out->stats.no_hit_pixels;
+    out->counts[static_cast<std::size_t>(col)] = count;
+    out->background[static_cast<std::size_t>(col)] = static_cast<float>(background);
+    out->opaque[static_cast<std::size_t>(col)] = static_cast<float>(opaque);
+  }
+};
+
 // The camera samples as one lattice of (width k) x (height k) points, and its
 // reflection grid: anchors on every g-th point of each axis, cells between
 // four of them.
@@ -111,12 +145,8 @@ struct SampleLattice {
   bool is_anchor(int x, int y) const { return x % g == 0 && y % g == 0; }
   int cells_x() const { return std::max(anchors_x - 1, 0); }
   int cells_y() const { return std::max(anchors_y - 1, 0); }
-  // The cell of sample (x, y), or -1 where it has no four anchors around it.
-  int cell(int x, int y) const {
-    const int cx = x / g, cy = y / g;
-    if (cx >= cells_x() || cy >= cells_y()) return -1;
-    return cy * cells_x() + cx;
-  }
+  // Whether sample (x, y) has four anchors around it (its cell: x / g, y / g).
+  bool in_cell(int x, int y) const { return x / g < cells_x() && y / g < cells_y(); }
 };
 
 void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
@@ -129,34 +159,21 @@ void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraMod
   scratch.clear();
   const int width = camera.width_px();
   const double inv_samples = 1.0 / (static_cast<double>(k) * k);
-  out->counts.assign(static_cast<std::size_t>(width), 0);
-  out->background.assign(static_cast<std::size_t>(width), 0.0f);
-  out->opaque.assign(static_cast<std::size_t>(width), 0.0f);
+  out->start_row(width);
   RowCameraRays rays(camera, camera_from_world, row, k);
   for (int col = 0; col < width; ++col) {
-    bool any_hit = false;
-    double background = 0, opaque = 0;
-    std::uint32_t count = 0;
-    for (int sy = 0; sy < k; ++sy) {
-      for (int sx = 0; sx < k; ++sx) {
-        const std::optional<CameraRay>& ray = rays.next();
-        if (!ray) {
-          ++out->stats.unproject_failures;
-          continue;
-        }
-        trace_ray(scene, index, *ray, options, &r);
-        out->stats.add(r, inv_samples);
-        if (r.counts.branches_traced > 1 || !r.opaque_hits.empty()) any_hit = true;
-        for (const SheetCrossing& c : r.crossings) scratch.push(grid_crossing(c, inv_samples));
-        count += static_cast<std::uint32_t>(r.crossings.size());
-        background += r.background_weight * inv_samples;
-        opaque += r.opaque_weight * inv_samples;
+    PixelSums pixel;
+    for (int sample = 0; sample < k * k; ++sample) {
+      const std::optional<CameraRay>& ray = rays.next();
+      if (!ray) {
+        ++out->stats.unproject_failures;
+        continue;
       }
+      trace_ray(scene, index, *ray, options, &r);
+      out->stats.add(r, inv_samples);
+      pixel.add_traced(r, inv_samples, &scratch);
     }
-    if (!any_hit) ++out->stats.no_hit_pixels;
-    out->counts[static_cast<std::size_t>(col)] = count;
-    out->background[static_cast<std::size_t>(col)] = static_cast<float>(background);
-    out->opaque[static_cast<std::size_t>(col)] = static_cast<float>(opaque);
+    pixel.store(col, out);
   }
   out->take_crossings(scratch);
 }
@@ -213,24 +230,19 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
         if (!lattice.is_anchor(col * k + sx, row * k + sy)) pixels.push_back(lattice.pixel(col * k + sx, row * k + sy));
   pixel_camera_rays(camera, camera_from_world, pixels, &rays);
   std::size_t next_ray = 0;
-  out->counts.assign(static_cast<std::size_t>(width), 0);
-  out->background.assign(static_cast<std::size_t>(width), 0.0f);
-  out->opaque.assign(static_cast<std::size_t>(width), 0.0f);
+  out->start_row(width);
   for (int col = 0; col < width; ++col) {
-    bool any_hit = false;
-    double background = 0, opaque = 0;
-    std::uint32_t count = 0;
+    PixelSums pixel;
     for (int sy = 0; sy < k; ++sy) {
       for (int sx = 0; sx < k; ++sx) {
         const int x = col * k + sx, y = row * k + sy;
         if (lattice.is_anchor(x, y)) {  // traced whole in its anchor row
           const AnchorRow& a = anchors[static_cast<std::size_t>(y / g)];
           const int i = x / g;
-          for (int m = 0; m < a.crossing_count(i); ++m) scratch.push(a.crossings(i)[m]);
-          count += static_cast<std::uint32_t>(a.crossing_count(i));
-          background += a.background(i);
-          opaque += a.opaque(i);
-          any_hit = any_hit || a.met_solid(i);
+          pixel.add_crossings(a.crossings(i), static_cast<std::size_t>(a.crossing_count(i)), &scratch);
+          pixel.background += a.background(i);
+          pixel.opaque += a.opaque(i);
+          pixel.any_hit = pixel.any_hit || a.met_solid(i);
           continue;
         }
         const std::optional<CameraRay>& ray = rays[next_ray++];
@@ -239,46 +251,35 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
           continue;
         }
         DeferredSubtrees deferred;
-        const int cx = x / g, cy = y / g;
-        if (lattice.cell(x, y) >= 0) {
-          const CellRow& cr = cells[static_cast<std::size_t>(cy)];
-          const std::uint32_t first = cr.begin[static_cast<std::size_t>(cx)];
+        const SubtreeCorners* deferred_corners = nullptr;
+        if (lattice.in_cell(x, y)) {
+          const CellRow& cr = cells[static_cast<std::size_t>(y / g)];
+          const std::uint32_t first = cr.begin[static_cast<std::size_t>(x / g)];
+          deferred_corners = cr.agreeing.corners.data() + first;
           deferred.ids = cr.agreeing.ids.data() + first;
           deferred.min_weight = cr.agreeing.min_weight.data() + first;
           deferred.max_weight = cr.agreeing.max_weight.data() + first;
-          deferred.count = cr.begin[static_cast<std::size_t>(cx) + 1] - first;
+          deferred.count = cr.begin[static_cast<std::size_t>(x / g) + 1] - first;
         }
         trace_ray(scene, index, *ray, options, &r, deferred);
         out->stats.add(r, inv_samples);
-        if (r.counts.branches_traced > 1 || !r.opaque_hits.empty()) any_hit = true;
-        for (const SheetCrossing& c : r.crossings) scratch.push(grid_crossing(c, inv_samples));
-        count += static_cast<std::uint32_t>(r.crossings.size());
-        background += r.background_weight * inv_samples;
-        opaque += r.opaque_weight * inv_samples;
+        pixel.add_traced(r, inv_samples, &scratch);
         if (r.deferred.empty()) continue;
-        const AnchorRow &top = anchors[static_cast<std::size_t>(cy)], &bottom = anchors[static_cast<std::size_t>(cy) + 1];
         interpolated.clear();
         double cut = 0;
         for (std::uint64_t id : r.deferred) {
-          SubtreeCorners corners;
-          // Always found: a deferred id is one of the cell's agreeing subtrees,
-          // which all four anchors hold.
-          const bool found = subtree_corners(top, bottom, cx, id, &corners);
-          assert(found);
-          if (!found) continue;
-          interpolate_subtree(corners, cell_px, static_cast<double>(x % g) / g, static_cast<double>(y % g) / g,
-                              &interpolated, &background, &opaque, &cut);
+          // The tracer defers only the ids it was given: the cell's agreeing subtrees.
+          const auto j = static_cast<std::size_t>(std::find(deferred.ids, deferred.ids + deferred.count, id) - deferred.ids);
+          assert(j < deferred.count);
+          interpolate_subtree(deferred_corners[j], cell_px, static_cast<double>(x % g) / g, static_cast<double>(y % g) / g,
+                              &interpolated, &pixel.background, &pixel.opaque, &cut);
         }
-        for (const GridCrossing& c : interpolated) scratch.push(c);
-        count += static_cast<std::uint32_t>(interpolated.size());
+        pixel.add_crossings(interpolated.data(), interpolated.size(), &scratch);
         out->stats.cut_weight += cut;
         out->stats.interpolated += static_cast<long>(r.deferred.size());
       }
     }
-    if (!any_hit) ++out->stats.no_hit_pixels;
-    out->counts[static_cast<std::size_t>(col)] = count;
-    out->background[static_cast<std::size_t>(col)] = static_cast<float>(background);
-    out->opaque[static_cast<std::size_t>(col)] = static_cast<float>(opaque);
+    pixel.store(col, out);
   }
   out->take_crossings(scratch);
 }
