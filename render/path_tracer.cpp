@@ -111,24 +111,40 @@ void record_crossing(const SheetPlane& sheet, const Eigen::Vector3d& n, const Br
   c.dst_dpixel.row(1) = sheet.t_axis.transpose() * dx;
 }
 
+// u . v for 3-vectors, summed in Eigen's order.
+double dot3(const double* u, const double* v) { return (u[0] * v[0] + u[1] * v[1]) + u[2] * v[2]; }
+
 // Reflected direction and its differential: r = d - 2 (d.n) n.
+// By coefficient, like transfer(), with Eigen's sums and their order.
 void reflect_with_differential(const Eigen::Vector3d& d, const Diff& dd, const Eigen::Vector3d& n, const Diff& dn,
                                Eigen::Vector3d* r, Diff* dr) {
   const double a = d.dot(n);
-  const Eigen::RowVector2d da = n.transpose() * dd + d.transpose() * dn;
+  double da[2];
+  for (int j = 0; j < 2; ++j) da[j] = dot3(n.data(), &dd(0, j)) + dot3(d.data(), &dn(0, j));
   *r = (d - 2 * a * n).normalized();
-  *dr = dd - 2 * (a * dn + n * da);
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 3; ++i) (*dr)(i, j) = dd(i, j) - 2 * (a * dn(i, j) + n[i] * da[j]);
 }
 
 // Refracted direction's differential (Igehy 1999, eq. 15-17) for
-// t = eta d + (eta c - cos_t) m, m the normal facing the ray, c = -d.m.
-Diff refraction_differential(const Eigen::Vector3d& d, const Diff& dd, const Eigen::Vector3d& m, const Diff& dm,
-                             const Eigen::Vector3d& t, double eta) {
+// t = eta d + (eta c - cos_t) m, m the normal facing the ray, c = -d.m, and
+// dm = sign_m * dn (sign_m = +-1, exact): the facing normal's differential is
+// never stored negated, whose reload across the columns stalls.
+Diff refraction_differential(const Eigen::Vector3d& d, const Diff& dd, const Eigen::Vector3d& m, double sign_m,
+                             const Diff& dn, const Eigen::Vector3d& t, double eta) {
   const double c = -d.dot(m);
   const double cos_t = -t.dot(m);
-  const Eigen::RowVector2d dc = -(m.transpose() * dd + d.transpose() * dm);
-  const Eigen::RowVector2d dcos_t = (cos_t > 0 ? eta * eta * c / cos_t : 0.0) * dc;
-  return eta * dd + m * (eta * dc - dcos_t) + (eta * c - cos_t) * dm;
+  const double k = cos_t > 0 ? eta * eta * c / cos_t : 0.0;
+  const double e = eta * c - cos_t;
+  Diff out;
+  for (int j = 0; j < 2; ++j) {
+    double dm[3];
+    for (int i = 0; i < 3; ++i) dm[i] = sign_m * dn(i, j);
+    const double dc = -(dot3(m.data(), &dd(0, j)) + dot3(d.data(), dm));
+    const double f = eta * dc - k * dc;
+    for (int i = 0; i < 3; ++i) out(i, j) = (eta * dd(i, j) + m[i] * f) + e * dm[i];
+  }
+  return out;
 }
 
 // The branch being followed lives in one of two slots; its refracted child is
@@ -149,7 +165,7 @@ std::unique_ptr<SceneIndex> make_scene_index(const TraceScene& scene) {
 }
 
 void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay& ray, const TraceOptions& options,
-               TraceResult* result_out, DeferredSubtrees deferred) {
+               TraceResult* result_out, const DeferredSubtrees& deferred) {
   const double dir_norm = ray.direction.norm();
   if (!ray.origin_mm.allFinite() || !ray.direction.allFinite() || !(dir_norm > 0))
     throw std::invalid_argument("trace_ray: origin and direction must be finite and the direction non-zero");
@@ -180,9 +196,16 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
   first.anchor = first.origin = ray.origin_mm;
   first.direction = ray.direction / dir_norm;
   first.danchor.setZero();
-  // d(v/|v|) = (I - u u^T) dv / |v|
-  first.ddirection = (Eigen::Matrix3d::Identity() - first.direction * first.direction.transpose()) *
-                     ray.ddirection_dpixel / dir_norm;
+  // d(v/|v|) = (I - u u^T) dv / |v|, by coefficient (Eigen's order) like transfer().
+  {
+    const Eigen::Vector3d& u = first.direction;
+    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - u * u.transpose();
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 3; ++i)
+        first.ddirection(i, j) = ((p(i, 0) * ray.ddirection_dpixel(0, j) + p(i, 1) * ray.ddirection_dpixel(1, j)) +
+                                  p(i, 2) * ray.ddirection_dpixel(2, j)) /
+                                 dir_norm;
+  }
   first.weight = 1;
   first.path = kCameraPath;
   first.subtree = -1;
@@ -378,8 +401,8 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
       Branch& t = child(ws.slot[1 - current]);
       t.direction = *refracted;
       const Eigen::Vector3d facing = ndn < 0 ? normal : Eigen::Vector3d(-normal);
-      const Diff dfacing = ndn < 0 ? dnormal : Diff(-dnormal);
-      t.ddirection = refraction_differential(b.direction, b.ddirection, facing, dfacing, t.direction, n1 / n2);
+      t.ddirection =
+          refraction_differential(b.direction, b.ddirection, facing, ndn < 0 ? 1.0 : -1.0, dnormal, t.direction, n1 / n2);
       t.origin = spawn_origin(*hit, t.direction, other_medium == kFluid);
       t.weight = w_refracted;
       t.path = extend_path(b.path, hit->shape_index, false);

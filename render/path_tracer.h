@@ -196,7 +196,7 @@ std::unique_ptr<SceneIndex> make_scene_index(const TraceScene& scene);
 // branch order included (depth first, refracted branch before reflected), so
 // the refracted chain's crossings come first and each subtree's are contiguous.
 void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay& ray, const TraceOptions& options,
-               TraceResult* result, DeferredSubtrees deferred = {});
+               TraceResult* result, const DeferredSubtrees& deferred = {});
 
 // The same with a linear search over the solids and no differentials: the
 // reference tracer of the tests (slow for big scenes; no setup needed).
