@@ -1,5 +1,6 @@
 // render_bench: the light-transport map of data/scenes/reactor.yaml and the
-// run-time-versus-error table of the forward render.
+// run-time-versus-error table of the forward render; the reflection grid's
+// error on the rendered image and on its correction onto the sheet.
 //   render_bench [--size N] [--table-size M] [--threads N] [--picture PATH] [--no-table]
 // Camera: the scene's camera resampled to N x N px (default 1000): the central
 // square of its 2560 x 2160 sensor with fx, fy, cx, cy scaled by N / 2160, so
@@ -15,6 +16,12 @@
 #include <vector>
 
 #include "bench/bench_common.h"
+#include "correct/camera_resampler.h"
+#include "correct/cell_mask.h"
+#include "correct/correction_defaults.h"
+#include "correct/correction_operator.h"
+#include "correct/reconstruct.h"
+#include "correct/sheet_grid.h"
 #include "render/forward_render.h"
 #include "render/path_tracer.h"
 #include "render/scene_yaml.h"
@@ -41,22 +48,65 @@ std::vector<float> point_sampled(const TransportMap& map, const SheetTexture& te
   return forward_render_values(map, [&](double s, double t) { return tex.at(s, t); });
 }
 
+// glasspiv correct's default correction of one camera: its own map (cut at
+// 0.1, traced whole), back-projected onto a sheet grid at the camera's
+// footprint with the glass removed; the checkerboard's truth per cell (the
+// texture averaged over the cell).
+struct Correction {
+  SheetGrid grid;
+  CorrectionOperator op;
+  std::vector<CellState> states;
+  std::vector<float> truth;
+
+  Correction(const TraceScene& ts, const CameraModel& cam, const RigidTransform& pose, const SheetTexture& tex,
+             int threads) {
+    grid = sheet_grid_covering(ts.sheet, median_footprint_mm(glass_removed_map(ts, cam, pose, 1, threads)));
+    op = build_correction_operator(build_transport_map(ts, cam, pose, correction_trace_options(), 1, threads), grid,
+                                   OperatorOptions{}, threads);
+    states = classify_cells({{&op, 1.0}}, ts);
+    const Eigen::Matrix2d cell = Eigen::Vector2d(grid.mm_per_px, -grid.mm_per_px).asDiagonal();
+    truth.resize(grid.cell_count());
+    for (int r = 0; r < grid.rows; ++r)
+      for (int c = 0; c < grid.cols; ++c)
+        truth[static_cast<std::size_t>(r) * grid.cols + c] = tex.average(grid.s_mm(c), grid.t_mm(r), cell);
+  }
+  std::vector<float> correct(const std::vector<float>& image) const { return back_projection({{&op, image.data()}}, states); }
+  // RMS of a - b over the valid cells.
+  double rms(const std::vector<float>& a, const std::vector<float>& b) const {
+    double sum = 0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (states[i] == CellState::valid) {
+        sum += (double(a[i]) - b[i]) * (double(a[i]) - b[i]);
+        ++n;
+      }
+    return n ? std::sqrt(sum / n) : 0.0;
+  }
+};
+
 // The reflection grid (TraceOptions::reflection_grid) against the same
 // samples traced whole: run time, segments, and the error it adds to the
-// rendered checkerboard (footprint filter); against `reference` too if given.
+// rendered checkerboard (footprint filter) and to its correction onto the
+// sheet; against `reference` too if given.
 void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransform& pose, const SheetTexture& tex,
                 int threads, const std::vector<float>* reference) {
+  const Correction correction(ts, cam, pose, tex, threads);
   std::printf("\nreflection grid, %dx%d camera, reflections on, min_weight 1e-2; errors of the rendered 5 mm "
-              "checkerboard (0/1, footprint filter) against the same samples/axis traced whole%s:\n",
-              cam.width_px(), cam.height_px(), reference ? " and against the reference above" : "");
+              "checkerboard (0/1, footprint filter) against the same samples/axis traced whole%s; each image "
+              "corrected (back-projection, glasspiv correct's default map cut at 0.1) onto a %dx%d sheet grid of "
+              "%.3f mm, RMS over its %zu valid cells against the correction of the image traced whole and against "
+              "the checkerboard itself:\n",
+              cam.width_px(), cam.height_px(), reference ? " and against the reference above" : "", correction.grid.cols,
+              correction.grid.rows, correction.grid.mm_per_px, count_cells(correction.states).valid);
   std::printf("| samples/axis | grid | tolerance | s per MP | branches/ray | subtrees interpolated/ray | "
-              "RMS vs traced whole | largest vs traced whole | light on the sheet vs traced whole |%s\n",
+              "RMS vs traced whole | largest vs traced whole | light on the sheet vs traced whole |%s "
+              "corrected: RMS vs traced whole | corrected: RMS vs checkerboard |\n",
               reference ? " RMS error |" : "");
-  std::printf("|---|---|---|---|---|---|---|---|---|%s\n", reference ? "---|" : "");
+  std::printf("|---|---|---|---|---|---|---|---|---|%s---|---|\n", reference ? "---|" : "");
   const double mp = cam.width_px() * double(cam.height_px()) / 1e6;
   for (int k : reference ? std::vector<int>{1, 2} : std::vector<int>{1}) {
     TransportMap whole;
-    std::vector<float> whole_image;
+    std::vector<float> whole_image, whole_corrected;
     double whole_light = 0;
     struct GridRow {
       int grid;
@@ -70,11 +120,13 @@ void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransfo
       TransportMap map = build_transport_map(ts, cam, pose, options, k, threads);
       const double seconds = clock.seconds();
       const std::vector<float> image = forward_render_values(map, tex);
+      const std::vector<float> corrected = correction.correct(image);
       double light = 0;
       for (float w : map.weight) light += w;
       if (g.grid == 1) {
         whole = std::move(map);
         whole_image = image;
+        whole_corrected = corrected;
         whole_light = light;
       }
       const TransportMap& m = g.grid == 1 ? whole : map;
@@ -88,7 +140,7 @@ void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransfo
                   double(m.stats.subtrees_interpolated) / m.stats.camera_rays, rms_difference(image, whole_image),
                   largest, light / whole_light);
       if (reference) std::printf(" %.4f |", rms_difference(image, *reference));
-      std::printf("\n");
+      std::printf(" %.2e | %.4f |\n", correction.rms(corrected, whole_corrected), correction.rms(corrected, correction.truth));
     }
   }
 }
