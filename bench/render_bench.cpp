@@ -98,11 +98,12 @@ void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransfo
               "the checkerboard itself:\n",
               cam.width_px(), cam.height_px(), reference ? " and against the reference above" : "", correction.grid.cols,
               correction.grid.rows, correction.grid.mm_per_px, count_cells(correction.states).valid);
-  std::printf("| samples/axis | grid | tolerance | s per MP | branches/ray | subtrees interpolated/ray | "
+  std::printf("| samples/axis | grid | tolerance | whole samples | s per MP | branches/sample | subtrees interpolated/sample | "
+              "samples interpolated whole | "
               "RMS vs traced whole | largest vs traced whole | light on the sheet vs traced whole |%s "
               "corrected: RMS vs traced whole | corrected: RMS vs checkerboard |\n",
               reference ? " RMS error |" : "");
-  std::printf("|---|---|---|---|---|---|---|---|---|%s---|---|\n", reference ? "---|" : "");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|%s---|---|\n", reference ? "---|" : "");
   const double mp = cam.width_px() * double(cam.height_px()) / 1e6;
   for (int k : reference ? std::vector<int>{1, 2} : std::vector<int>{1}) {
     TransportMap whole;
@@ -111,10 +112,13 @@ void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransfo
     struct GridRow {
       int grid;
       double tolerance;
+      bool whole = false;
     };
-    for (const GridRow& g : {GridRow{1, 0}, GridRow{2, 0.05}, GridRow{2, 0.1}, GridRow{2, 0.25}, GridRow{4, 0.1}}) {
+    for (const GridRow& g : {GridRow{1, 0}, GridRow{2, 0.05}, GridRow{2, 0.1}, GridRow{2, 0.25}, GridRow{4, 0.1},
+                             GridRow{2, 0.05, true}, GridRow{2, 0.1, true}, GridRow{4, 0.1, true}}) {
       TraceOptions options;
       options.reflection_grid = g.grid;
+      options.grid_whole_samples = g.whole;
       if (g.grid > 1) options.reflection_grid_tolerance = g.tolerance;
       const Stopwatch clock;
       TransportMap map = build_transport_map(ts, cam, pose, options, k, threads);
@@ -135,9 +139,11 @@ void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransfo
         largest = std::max(largest, std::abs(double(image[i]) - whole_image[i]));
       char tolerance[16] = "";
       if (g.grid > 1) std::snprintf(tolerance, sizeof tolerance, "%g", g.tolerance);
-      std::printf("| %d | %d | %s | %.3f | %.2f | %.2f | %.2e | %.4f | %.5f |", k, g.grid, tolerance, seconds / mp,
-                  double(m.stats.branches_traced) / m.stats.camera_rays,
-                  double(m.stats.subtrees_interpolated) / m.stats.camera_rays, rms_difference(image, whole_image),
+      const double samples = double(m.stats.camera_rays + m.stats.samples_interpolated);
+      std::printf("| %d | %d | %s | %s | %.3f | %.2f | %.2f | %.1f %% | %.2e | %.4f | %.5f |", k, g.grid, tolerance,
+                  g.whole ? "yes" : "", seconds / mp, double(m.stats.branches_traced) / samples,
+                  double(m.stats.subtrees_interpolated) / samples, 100.0 * m.stats.samples_interpolated / samples,
+                  rms_difference(image, whole_image),
                   largest, light / whole_light);
       if (reference) std::printf(" %.4f |", rms_difference(image, *reference));
       std::printf(" %.2e | %.4f |\n", correction.rms(corrected, whole_corrected), correction.rms(corrected, correction.truth));
@@ -179,24 +185,29 @@ int main(int argc, char** argv) {
     double min_weight;
     double min_weight_reflected = 0;
     int reflection_grid = 1;
+    bool whole_samples = false;
   };
-  std::printf("\n| setting | s per MP | camera rays/s | branches/ray | crossings/px | rays in closed form | map MiB |\n");
+  std::printf("\n| setting | s per MP | camera rays traced/s | branches/sample | crossings/px | rays in closed form | map MiB |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   for (const Setting& s : {Setting{"refraction only, min_weight 1e-2", false, 1e-2},
                            Setting{"reflections, min_weight 1e-2", true, 1e-2},
                            Setting{"reflections, min_weight 1e-2, reflected 3e-2", true, 1e-2, 3e-2},
                            Setting{"reflections, min_weight 1e-2, reflection grid 2", true, 1e-2, 0, 2},
+                           Setting{"reflections, min_weight 1e-2, reflection grid 2, whole samples", true, 1e-2, 0, 2, true},
+                           Setting{"refraction only, min_weight 1e-2, grid 2, whole samples", false, 1e-2, 0, 2, true},
                            Setting{"reflections, min_weight 1e-3", true, 1e-3}}) {
     TraceOptions options;
     options.reflections = s.reflections;
     options.min_weight = s.min_weight;
     options.min_weight_reflected = s.min_weight_reflected;
     options.reflection_grid = s.reflection_grid;
+    options.grid_whole_samples = s.whole_samples;
     const Stopwatch clock;
     const TransportMap map = build_transport_map(ts, cam, pose, options, 1, threads);
     const double t = clock.seconds();
     std::printf("| %s | %.3f | %.3g | %.2f | %.3f | %.1f %% | %.1f |\n", s.name, t / (map.pixel_count() / 1e6),
-                map.stats.camera_rays / t, double(map.stats.branches_traced) / map.stats.camera_rays,
+                map.stats.camera_rays / t,
+                double(map.stats.branches_traced) / double(map.stats.camera_rays + map.stats.samples_interpolated),
                 double(map.crossing_count()) / map.pixel_count(),
                 100.0 * map.stats.closed_form_rays / map.stats.camera_rays, map.memory_bytes() / 1048576.0);
   }

@@ -76,6 +76,12 @@ struct TraceOptions {
   // traced. 1: every sample traced whole.
   int reflection_grid = 1;
   double reflection_grid_tolerance = 0.1;
+  // With a grid g > 1, also interpolate a sample whole (its refracted chain
+  // too: no ray traced) where its four anchors agree on everything: their
+  // refracted chains as a subtree must, and every subtree. An approximation
+  // of the refracted light as well (bench/RESULTS.md tables its error); works
+  // with reflections off too. false: each sample's refracted chain is traced.
+  bool grid_whole_samples = false;
 };
 
 // Interface events on the path before the crossing: none, refractions only,

@@ -23,6 +23,9 @@ void AnchorRow::add(const TraceResult* r, double scale) {
   const std::uint32_t first_crossing = static_cast<std::uint32_t>(crossings_.size());
   const std::size_t first_subtree = subtrees_.size();
   double background = 0, opaque = 0;
+  SubtreeRecord chain;
+  chain.weight = 1;
+  bool chain_ok = r != nullptr;
   if (r) {
     for (const ReflectedSubtree& st : r->subtrees) {
       SubtreeRecord& rec = subtrees_.emplace_back();
@@ -40,6 +43,9 @@ void AnchorRow::add(const TraceResult* r, double scale) {
       const std::uint32_t index = static_cast<std::uint32_t>(crossings_.size()) - first_crossing;
       crossings_.push_back(grid_crossing(c, scale));
       if (c.subtree < 0) {
+        // The refracted chain's crossings come first (the tracer's order).
+        if (index != chain.count) chain_ok = false;
+        ++chain.count;
         previous = -1;
         continue;
       }
@@ -52,10 +58,18 @@ void AnchorRow::add(const TraceResult* r, double scale) {
       ++rec.count;
       previous = c.subtree;
     }
-    if (!contiguous) subtrees_.resize(first_subtree);  // never seen: such an anchor's subtrees are traced
+    if (!contiguous) {  // never seen: such an anchor's subtrees are traced
+      subtrees_.resize(first_subtree);
+      chain_ok = false;
+    }
     background = r->background_weight * scale;
     opaque = r->opaque_weight * scale;
+    chain.background = static_cast<float>(background);
+    chain.opaque = static_cast<float>(opaque);
+    chain.cut = static_cast<float>((r->cut_by_weight_weight + r->cut_by_depth_weight + r->skipped_reflection_weight) * scale);
   }
+  chain_.push_back(chain);
+  chain_ok_.push_back(chain_ok);
   begin_.push_back(static_cast<std::uint32_t>(crossings_.size()));
   subtree_begin_.push_back(static_cast<std::uint32_t>(subtrees_.size()));
   background_.push_back(background);
@@ -149,6 +163,20 @@ void agreeing_subtrees(const AnchorRow& top, const AnchorRow& bottom, int col, d
     out->min_weight.push_back(lo * (1 - tolerance.relative));
     out->max_weight.push_back(hi * (1 + tolerance.relative));
   }
+}
+
+bool cell_agrees_whole(const AnchorRow& top, const AnchorRow& bottom, int col, double cell_px,
+                       const GridTolerance& tolerance, std::size_t agreeing, SubtreeCorners* chain) {
+  const AnchorRow* rows[4] = {&top, &top, &bottom, &bottom};
+  for (int i = 0; i < 4; ++i) {
+    const int anchor = col + (i & 1);
+    chain->record[i] = rows[i]->chain(anchor);
+    if (!chain->record[i] || rows[i]->met_solid(anchor) != top.met_solid(col) ||
+        static_cast<std::size_t>(rows[i]->subtree_count(anchor)) != agreeing)
+      return false;
+    chain->crossings[i] = rows[i]->crossings(anchor);
+  }
+  return subtree_agrees(*chain, cell_px, tolerance);
 }
 
 namespace {

@@ -65,6 +65,12 @@ class AnchorRow {
   double opaque(int i) const { return opaque_[at(i)]; }
   // Whether anchor i's ray met a solid (for TransportStats::pixels_without_solid_hit).
   bool met_solid(int i) const { return met_solid_[at(i)] != 0; }
+  // Anchor i's whole trace as one record for the comparison and interpolation
+  // of whole samples (TraceOptions::grid_whole_samples): weight 1, the whole
+  // trace's background, opaque and cut light, and its refracted chain's
+  // crossings (the first ones); nullptr for an anchor whose ray could not be
+  // unprojected or whose crossings were not in the tracer's order.
+  const SubtreeRecord* chain(int i) const { return chain_ok_[at(i)] ? &chain_[at(i)] : nullptr; }
   // Anchor i's subtrees, in the order traced; the one with `id`, or nullptr.
   const SubtreeRecord* subtrees(int i) const { return subtrees_.data() + subtree_begin_[at(i)]; }
   int subtree_count(int i) const { return static_cast<int>(subtree_begin_[at(i) + 1] - subtree_begin_[at(i)]); }
@@ -77,6 +83,8 @@ class AnchorRow {
   std::vector<SubtreeRecord> subtrees_;
   std::vector<double> background_, opaque_;  // the whole trace's, as the map sums them
   std::vector<std::uint8_t> met_solid_;
+  std::vector<SubtreeRecord> chain_;
+  std::vector<std::uint8_t> chain_ok_;
 };
 
 // One subtree at the four corners of a cell: [0] top left, [1] top right (g
@@ -117,6 +125,15 @@ struct AgreeingSubtrees {
 // of its top-left anchor's; appended to *out.
 void agreeing_subtrees(const AnchorRow& top, const AnchorRow& bottom, int col, double cell_px,
                        const GridTolerance& tolerance, AgreeingSubtrees* out);
+
+// The cell of top-left anchor `col` agrees whole when the four anchors met
+// solids alike, their refracted chains (AnchorRow::chain) agree as a subtree
+// does (the whole trace's escaped and opaque light compared as a subtree's,
+// within `tolerance`), and every subtree of each anchor agrees: `agreeing`
+// holds the cell's agreeing subtrees (from agreeing_subtrees), and each anchor
+// must have as many. Then *chain gets the chains' corners.
+bool cell_agrees_whole(const AnchorRow& top, const AnchorRow& bottom, int col, double cell_px,
+                       const GridTolerance& tolerance, std::size_t agreeing, SubtreeCorners* chain);
 
 // The subtree at the point (fx, fy) in [0, 1]^2 of the cell: each crossing's
 // position interpolated from the corners' positions and footprint Jacobians

@@ -31,6 +31,7 @@ namespace {
 struct RowStats {
   long camera_rays = 0, branches = 0, no_hit_pixels = 0, unproject_failures = 0;
   long closed_form = 0, cut_by_weight = 0, cut_by_depth = 0, reflections_skipped = 0, interpolated = 0;
+  long samples_interpolated = 0;
   double cut_weight = 0;
 
   // One traced sample, weights times scale (its deferred subtrees are not cut).
@@ -53,6 +54,7 @@ struct RowStats {
     st->branches_cut_by_depth += cut_by_depth;
     st->reflections_skipped += reflections_skipped;
     st->subtrees_interpolated += interpolated;
+    st->samples_interpolated += samples_interpolated;
     st->cut_weight += cut_weight;
   }
 };
@@ -201,10 +203,15 @@ void trace_anchor_row(const TraceScene& scene, const SceneIndex& index, const Ca
   }
 }
 
-// The subtrees that agree in each cell of one cell row (CSR over its cells).
+// The subtrees that agree in each cell of one cell row (CSR over its cells),
+// and with TraceOptions::grid_whole_samples the cells that agree whole.
 struct CellRow {
   std::vector<std::uint32_t> begin;  // cells_x + 1
   AgreeingSubtrees agreeing;
+  std::vector<std::uint8_t> whole;     // cells_x, or empty
+  std::vector<SubtreeCorners> chains;  // per cell (valid where whole)
+
+  bool agrees_whole(int cx) const { return !whole.empty() && whole[static_cast<std::size_t>(cx)] != 0; }
 };
 
 // A pixel row with the reflection grid: anchors from their rows; every other
@@ -223,11 +230,17 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
   const int width = camera.width_px(), k = lattice.k, g = lattice.g;
   const double inv_samples = 1.0 / (static_cast<double>(k) * k);
   const double cell_px = static_cast<double>(g) / k;
+  // A sample is traced unless it is an anchor or its cell agrees whole.
+  const auto interpolated_whole = [&](int x, int y) {
+    return lattice.in_cell(x, y) && cells[static_cast<std::size_t>(y / g)].agrees_whole(x / g);
+  };
   pixels.clear();
   for (int col = 0; col < width; ++col)
     for (int sy = 0; sy < k; ++sy)
-      for (int sx = 0; sx < k; ++sx)
-        if (!lattice.is_anchor(col * k + sx, row * k + sy)) pixels.push_back(lattice.pixel(col * k + sx, row * k + sy));
+      for (int sx = 0; sx < k; ++sx) {
+        const int x = col * k + sx, y = row * k + sy;
+        if (!lattice.is_anchor(x, y) && !interpolated_whole(x, y)) pixels.push_back(lattice.pixel(x, y));
+      }
   pixel_camera_rays(camera, camera_from_world, pixels, &rays);
   std::size_t next_ray = 0;
   out->start_row(width);
@@ -243,6 +256,23 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
           pixel.background += a.background(i);
           pixel.opaque += a.opaque(i);
           pixel.any_hit = pixel.any_hit || a.met_solid(i);
+          continue;
+        }
+        const double fx = static_cast<double>(x % g) / g, fy = static_cast<double>(y % g) / g;
+        if (interpolated_whole(x, y)) {
+          const CellRow& cr = cells[static_cast<std::size_t>(y / g)];
+          const auto cx = static_cast<std::size_t>(x / g);
+          interpolated.clear();
+          // The chain's record carries the whole trace's escaped, opaque and cut light.
+          double cut = 0, unused = 0;
+          interpolate_subtree(cr.chains[cx], cell_px, fx, fy, &interpolated, &pixel.background, &pixel.opaque, &cut);
+          for (std::uint32_t j = cr.begin[cx]; j < cr.begin[cx + 1]; ++j)
+            interpolate_subtree(cr.agreeing.corners[j], cell_px, fx, fy, &interpolated, &unused, &unused, &unused);
+          pixel.add_crossings(interpolated.data(), interpolated.size(), &scratch);
+          pixel.any_hit = pixel.any_hit || anchors[static_cast<std::size_t>(y / g)].met_solid(x / g);  // as all four
+          out->stats.cut_weight += cut;
+          out->stats.interpolated += static_cast<long>(cr.begin[cx + 1] - cr.begin[cx]);
+          ++out->stats.samples_interpolated;
           continue;
         }
         const std::optional<CameraRay>& ray = rays[next_ray++];
@@ -271,8 +301,7 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
           // The tracer defers only the ids it was given: the cell's agreeing subtrees.
           const auto j = static_cast<std::size_t>(std::find(deferred.ids, deferred.ids + deferred.count, id) - deferred.ids);
           assert(j < deferred.count);
-          interpolate_subtree(deferred_corners[j], cell_px, static_cast<double>(x % g) / g, static_cast<double>(y % g) / g,
-                              &interpolated, &pixel.background, &pixel.opaque, &cut);
+          interpolate_subtree(deferred_corners[j], cell_px, fx, fy, &interpolated, &pixel.background, &pixel.opaque, &cut);
         }
         pixel.add_crossings(interpolated.data(), interpolated.size(), &scratch);
         out->stats.cut_weight += cut;
@@ -298,7 +327,7 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
                                   const std::function<void(int, int)>& progress) {
   const int height = camera.height_px();
   std::vector<RowBuffer> rows(static_cast<std::size_t>(height));
-  if (!options.reflections || options.reflection_grid == 1) {
+  if (options.reflection_grid == 1 || !(options.reflections || options.grid_whole_samples)) {
     // trace_ray throws only for non-finite rays, which pixel_camera_ray never produces.
     *threads = parallel_rows(
         height, *threads,
@@ -352,11 +381,20 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
     parallel_rows(std::max(cells_end - first_cell, 0), requested_threads, [&](int i) {
       const int cy = first_cell + i;
       CellRow& cr = cells[static_cast<std::size_t>(cy)];
+      const AnchorRow &top = anchors[static_cast<std::size_t>(cy)], &bottom = anchors[static_cast<std::size_t>(cy) + 1];
       cr.begin.push_back(0);
+      if (options.grid_whole_samples) {
+        cr.whole.resize(static_cast<std::size_t>(lattice.cells_x()));
+        cr.chains.resize(static_cast<std::size_t>(lattice.cells_x()));
+      }
       for (int cx = 0; cx < lattice.cells_x(); ++cx) {
-        agreeing_subtrees(anchors[static_cast<std::size_t>(cy)], anchors[static_cast<std::size_t>(cy) + 1], cx,
-                          cell_px, tolerance, &cr.agreeing);
+        agreeing_subtrees(top, bottom, cx, cell_px, tolerance, &cr.agreeing);
+        const std::uint32_t first = cr.begin.back();
         cr.begin.push_back(static_cast<std::uint32_t>(cr.agreeing.ids.size()));
+        if (options.grid_whole_samples)
+          cr.whole[static_cast<std::size_t>(cx)] = cell_agrees_whole(top, bottom, cx, cell_px, tolerance,
+                                                                     cr.begin.back() - first,
+                                                                     &cr.chains[static_cast<std::size_t>(cx)]);
       }
     });
     cells_compared = std::max(cells_end, first_cell);

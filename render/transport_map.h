@@ -17,7 +17,8 @@
 // With TraceOptions::reflection_grid g > 1 (and reflections on) reflected
 // subtrees that agree among anchors on every g-th sample are interpolated
 // between them (render/reflection_grid.h); each sample's refracted chain is
-// always traced. A sample's interpolated crossings follow its traced ones.
+// traced, unless TraceOptions::grid_whole_samples interpolates the whole
+// sample. A sample's interpolated crossings follow its traced ones.
 //
 // Known limit: a pixel whose ray cannot be unprojected (past the lens model's
 // fold) has no crossings and no background weight (counted in unproject_failures).
@@ -33,7 +34,7 @@ namespace glasspiv {
 
 // What the build did and what it skipped (docs/tracer.md).
 struct TransportStats {
-  long camera_rays = 0;        // camera rays traced (pixels x samples)
+  long camera_rays = 0;        // camera rays traced (pixels x samples, less samples_interpolated)
   long branches_traced = 0;    // segments followed, summed over all rays (TraceCounts)
   long crossings = 0;          // sheet crossings stored
   long pixels_without_solid_hit = 0;  // no sample of the pixel met any solid
@@ -44,6 +45,8 @@ struct TransportStats {
   long reflections_skipped = 0;       // not spawned (TraceOptions::reflections = false)
   long subtrees_interpolated = 0;     // reflected subtrees interpolated, not traced
                                       // (TraceOptions::reflection_grid); not kept in map files
+  long samples_interpolated = 0;      // camera samples interpolated whole, not traced
+                                      // (TraceOptions::grid_whole_samples); not kept in map files
   double cut_weight = 0;              // weight of those three, summed over pixels (1 = one whole pixel)
   int threads = 0;                    // threads used
 };

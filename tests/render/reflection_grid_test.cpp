@@ -244,6 +244,109 @@ TEST(ReflectionGrid, ASubtreeThatDisagreesAnywhereIsTraced) {
   EXPECT_FALSE(top.met_solid(1));
 }
 
+// An anchor whose refracted chain's one crossing is quadratic in the pixel too
+// (path 999, weight 0.9), beside quadratic_anchor's subtree 77; it met solids.
+TraceResult whole_anchor(double col, double row) {
+  TraceResult r = quadratic_anchor(col, row);
+  SheetCrossing& main = r.crossings[0];
+  main.s_mm = -2 + 0.3 * col + 0.1 * row + 0.002 * col * col - 0.001 * col * row + 0.004 * row * row;
+  main.t_mm = 5 - 0.1 * col + 0.6 * row + 0.003 * col * col + 0.002 * col * row - 0.001 * row * row;
+  main.dst_dpixel << 0.3 + 0.004 * col - 0.001 * row, 0.1 - 0.001 * col + 0.008 * row,  //
+      -0.1 + 0.006 * col + 0.002 * row, 0.6 + 0.002 * col - 0.002 * row;
+  main.weight = 0.9;
+  main.path = 999;
+  main.tag = CrossingTag::refracted_only;
+  r.counts.branches_traced = 5;
+  r.cut_by_weight_weight = 0.004;
+  return r;
+}
+
+template <typename Edit>
+std::pair<AnchorRow, AnchorRow> whole_rows(int corner, Edit edit) {
+  AnchorRow top, bottom;
+  for (int i = 0; i < 4; ++i) {
+    TraceResult r = whole_anchor((i & 1) * kCellPx, (i >> 1) * kCellPx);
+    if (i == corner) edit(r);
+    (i < 2 ? top : bottom).add(&r, 1.0);
+  }
+  return {std::move(top), std::move(bottom)};
+}
+
+// Whether the cell agrees whole (cell_agrees_whole after agreeing_subtrees).
+bool agrees_whole(const std::pair<AnchorRow, AnchorRow>& rows, SubtreeCorners* chain) {
+  GridTolerance tol;
+  tol.weight_floor = 1e-2;
+  AgreeingSubtrees out;
+  agreeing_subtrees(rows.first, rows.second, 0, kCellPx, tol, &out);
+  return cell_agrees_whole(rows.first, rows.second, 0, kCellPx, tol, out.ids.size(), chain);
+}
+
+TEST(ReflectionGrid, ACellThatAgreesWholeInterpolatesTheRefractedChainAndTheWholeTracesLight) {
+  SubtreeCorners chain;
+  const auto rows = whole_rows(-1, [](TraceResult&) {});  // the corners point into these
+  ASSERT_TRUE(agrees_whole(rows, &chain));
+  for (double fx : {0.0, 0.5, 0.25})
+    for (double fy : {0.0, 0.5, 0.75}) {
+      std::vector<GridCrossing> out;
+      double background = 0, opaque = 0, cut = 0;
+      interpolate_subtree(chain, kCellPx, fx, fy, &out, &background, &opaque, &cut);
+      ASSERT_EQ(out.size(), 1u);  // the chain's crossing only: the subtree's are its own record's
+      const double col = fx * kCellPx, row = fy * kCellPx;
+      EXPECT_NEAR(out[0].s_mm, -2 + 0.3 * col + 0.1 * row + 0.002 * col * col - 0.001 * col * row + 0.004 * row * row,
+                  2e-6);
+      EXPECT_NEAR(out[0].t_mm, 5 - 0.1 * col + 0.6 * row + 0.003 * col * col + 0.002 * col * row - 0.001 * row * row,
+                  2e-6);
+      EXPECT_NEAR(out[0].weight, 0.9, 1e-7);
+      EXPECT_EQ(out[0].path, 999u);
+      EXPECT_EQ(out[0].tag, static_cast<std::uint8_t>(CrossingTag::refracted_only));
+      // The whole trace's light, subtrees' shares included, not the chain's alone.
+      EXPECT_NEAR(background, 0.06, 1e-8);
+      EXPECT_NEAR(cut, 0.004, 1e-8);
+    }
+}
+
+TEST(ReflectionGrid, ACellWithAnyDisagreementIsNotInterpolatedWhole) {
+  for (int corner = 0; corner < 4; ++corner) {
+    SCOPED_TRACE(corner);
+    SubtreeCorners chain;
+    // The chain's crossing off by a fifth of a footprint (sqrt |det J| >= 0.42 mm).
+    EXPECT_FALSE(agrees_whole(whole_rows(corner, [](TraceResult& r) { r.crossings[0].s_mm += 0.2 * 0.42; }), &chain));
+    EXPECT_FALSE(agrees_whole(whole_rows(corner, [](TraceResult& r) { r.crossings[0].path = 1; }), &chain));
+    EXPECT_FALSE(agrees_whole(whole_rows(corner, [](TraceResult& r) { r.crossings[0].weight *= 0.8; }), &chain));
+    // The chain ends elsewhere: no chain crossing, its light left the scene.
+    EXPECT_FALSE(agrees_whole(whole_rows(corner,
+                                         [](TraceResult& r) {
+                                           r.crossings.erase(r.crossings.begin());
+                                           r.background_weight += 0.9;
+                                         }),
+                              &chain));
+    // The subtree disagrees, or one corner has one more.
+    EXPECT_FALSE(agrees_whole(whole_rows(corner, [](TraceResult& r) { r.crossings[1].path = 99; }), &chain));
+    EXPECT_FALSE(agrees_whole(whole_rows(corner,
+                                         [](TraceResult& r) {
+                                           ReflectedSubtree& st = r.subtrees.emplace_back();
+                                           st.id = 78;
+                                           st.weight = 0.02;
+                                         }),
+                              &chain));
+    // Its ray met no solid where the others' did.
+    EXPECT_FALSE(agrees_whole(whole_rows(corner, [](TraceResult& r) { r.counts.branches_traced = 1; }), &chain));
+    // Light that left the scene beyond the cut-off of 1e-2.
+    EXPECT_FALSE(agrees_whole(whole_rows(corner, [](TraceResult& r) { r.background_weight += 0.02; }), &chain));
+    EXPECT_TRUE(agrees_whole(whole_rows(corner, [](TraceResult& r) { r.background_weight += 0.005; }), &chain));
+  }
+  // A corner whose ray could not be unprojected.
+  AnchorRow top, bottom;
+  const TraceResult r = whole_anchor(0, 0);
+  top.add(&r, 1.0);
+  top.add(nullptr, 1.0);
+  bottom.add(&r, 1.0);
+  bottom.add(&r, 1.0);
+  SubtreeCorners chain;
+  EXPECT_EQ(top.chain(1), nullptr);
+  EXPECT_FALSE(cell_agrees_whole(top, bottom, 0, kCellPx, GridTolerance{}, 0, &chain));
+}
+
 // ---------------------------------------------------------------- maps
 
 // Pixel p's crossings as (s, t, weight, footprint), sorted.
@@ -377,6 +480,81 @@ TEST(ReflectionGridMap, AnySamplingAndGridKeepsTheLightAndAnchorsExact) {
         }
       }
   }
+}
+
+// Whole samples: on the slab, whose every path is smooth in the pixel, most
+// samples are interpolated whole, with or without reflections, and land where
+// the tracer puts them; the anchors stay exact and the map is the same on any
+// thread count.
+TEST(ReflectionGridMap, WholeSamplesLandWhereTheTracerPutsThem) {
+  for (bool reflections : {true, false})
+    for (int k : {1, 2}) {
+      SCOPED_TRACE(testing::Message() << "reflections " << reflections << " k " << k);
+      TraceScene scene = slab_and_sphere();
+      scene.solids.pop_back();  // the slab alone
+      const CameraModel cam(40, 150, 120.0, 110.0, 19.3, 74.6);
+      TraceOptions options;
+      options.min_weight = 1e-4;
+      options.reflections = reflections;
+      const TransportMap whole = build_transport_map(scene, cam, RigidTransform{}, options, k, 2);
+      options.reflection_grid = 2;
+      options.grid_whole_samples = true;
+      const TransportMap grid = build_transport_map(scene, cam, RigidTransform{}, options, k, 2);
+      const long samples = 40L * 150 * k * k;
+      EXPECT_EQ(grid.stats.camera_rays + grid.stats.samples_interpolated, samples);
+      // All but the anchors (a quarter) and the last row and column of samples.
+      EXPECT_GT(grid.stats.samples_interpolated, samples * 0.7);
+      EXPECT_EQ(grid.stats.pixels_without_solid_hit, whole.stats.pixels_without_solid_hit);
+      ASSERT_EQ(grid.pixel_count(), whole.pixel_count());
+      double worst_position = 0, worst_weight = 0, worst_background = 0;
+      for (std::size_t p = 0; p < whole.pixel_count(); ++p) {
+        const std::vector<Crossing> a = crossings_of(whole, p), b = crossings_of(grid, p);
+        ASSERT_EQ(a.size(), b.size()) << "pixel " << p;
+        for (std::size_t i = 0; i < a.size(); ++i) {
+          worst_position = std::max(worst_position, std::hypot(a[i].s - b[i].s, a[i].t - b[i].t) / a[i].footprint);
+          worst_weight = std::max(worst_weight, std::abs(a[i].w - b[i].w) / a[i].w);
+        }
+        worst_background = std::max(worst_background, std::abs(double(grid.background_weight[p]) - whole.background_weight[p]));
+      }
+      // As the interpolated ghosts above: second-order terms over a 2 px cell.
+      EXPECT_LT(worst_position, 1e-2);
+      EXPECT_LT(worst_weight, 1e-3);
+      EXPECT_LT(worst_background, 1e-5);
+      std::printf("slab, whole samples, reflections %d, %d x %d samples: %ld of %ld interpolated, worst %.2e "
+                  "footprints, %.2e relative weight, %.1e background\n",
+                  reflections, k, k, grid.stats.samples_interpolated, samples, worst_position, worst_weight,
+                  worst_background);
+      const TransportMap one = build_transport_map(scene, cam, RigidTransform{}, options, k, 1);
+      expect_same_map_arrays(one, grid);
+    }
+}
+
+// Slab and sphere: wherever a sphere's rim lies between anchors the samples
+// are traced, so every pixel keeps the whole trace's crossings, and the
+// anchors' are the whole trace's to the bit.
+TEST(ReflectionGridMap, WholeSamplesNeverBridgeASpheresRim) {
+  const TraceScene scene = slab_and_sphere();
+  TraceOptions options;
+  options.min_weight = 1e-4;
+  const TransportMap whole = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 2);
+  options.reflection_grid = 2;
+  options.grid_whole_samples = true;
+  const TransportMap grid = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 2);
+  EXPECT_GT(grid.stats.samples_interpolated, 0);
+  EXPECT_LT(grid.stats.samples_interpolated, 40 * 30 * 3 / 4);  // the sphere's samples are traced
+  for (std::size_t p = 0; p < whole.pixel_count(); ++p) {
+    ASSERT_EQ(grid.pixel_offsets[p + 1] - grid.pixel_offsets[p], whole.pixel_offsets[p + 1] - whole.pixel_offsets[p])
+        << "pixel " << p;
+    EXPECT_NEAR(grid.background_weight[p], whole.background_weight[p], 1e-3) << "pixel " << p;
+  }
+  for (int row = 0; row < whole.height; row += 2)
+    for (int col = 0; col < whole.width; col += 2) {
+      const std::size_t p = static_cast<std::size_t>(row) * whole.width + col;
+      for (std::uint32_t i = 0; i < whole.pixel_offsets[p + 1] - whole.pixel_offsets[p]; ++i) {
+        EXPECT_EQ(grid.s_mm[grid.pixel_offsets[p] + i], whole.s_mm[whole.pixel_offsets[p] + i]);
+        EXPECT_EQ(grid.weight[grid.pixel_offsets[p] + i], whole.weight[whole.pixel_offsets[p] + i]);
+      }
+    }
 }
 
 TEST(ReflectionGridMap, WithoutReflectionsOrAGridTheMapIsTracedWhole) {

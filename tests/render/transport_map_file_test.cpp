@@ -319,6 +319,17 @@ TEST(TransportMapFingerprint, ChangesWithEverySingleInput) {
          in.options.reflection_grid = 2;
          in.options.reflection_grid_tolerance *= 2;
        }},
+      {"options.grid_whole_samples with a grid",
+       [&](Inputs& in) {
+         in.options.reflection_grid = 2;
+         in.options.grid_whole_samples = true;
+       }},
+      {"options.grid_whole_samples with a grid, no reflections",
+       [&](Inputs& in) {
+         in.options.reflections = false;
+         in.options.reflection_grid = 2;
+         in.options.grid_whole_samples = true;
+       }},
       {"options.max_depth", [&](Inputs& in) { in.options.max_depth += 1; }},
       {"samples_per_axis", [&](Inputs& in) { in.samples += 1; }},
   };
@@ -339,7 +350,7 @@ TEST(TransportMapFingerprint, ChangesWithEverySingleInput) {
 // hashes the new field; then update the size below. LP64 layouts (Linux x86-64, arm64).
 TEST(TransportMapFingerprint, HashesEveryFieldOfTheInputStructs) {
 #if defined(__LP64__)
-  EXPECT_EQ(sizeof(TraceOptions), 40u) << "TraceOptions changed: hash the new field in transport_map_fingerprint";
+  EXPECT_EQ(sizeof(TraceOptions), 48u) << "TraceOptions changed: hash the new field in transport_map_fingerprint";
   EXPECT_EQ(sizeof(TraceMaterial), 32u) << "TraceMaterial changed: hash the new field";
   EXPECT_EQ(sizeof(SheetPlane), 88u) << "SheetPlane changed: hash the new field";
   EXPECT_EQ(sizeof(TraceScene), 24u + 8u + sizeof(SheetPlane)) << "TraceScene changed: hash the new field";
@@ -348,8 +359,8 @@ TEST(TransportMapFingerprint, HashesEveryFieldOfTheInputStructs) {
   EXPECT_EQ(sizeof(Box), 120u) << "Box changed: hash the new field";
   EXPECT_EQ(sizeof(Cylinder), 64u) << "Cylinder changed: hash the new field";
   EXPECT_EQ(sizeof(Rectangle), 88u) << "Rectangle changed: hash the new field";
-  // subtrees_interpolated (8 bytes) is a count of work saved and not stored.
-  EXPECT_EQ(sizeof(TransportStats), 96u) << "TransportStats changed: store the new field in the file header";
+  // subtrees_interpolated and samples_interpolated (8 bytes each) count work saved and are not stored.
+  EXPECT_EQ(sizeof(TransportStats), 104u) << "TransportStats changed: store the new field in the file header";
   EXPECT_EQ(sizeof(RigidTransform), 96u) << "RigidTransform changed: hash the new field";
   EXPECT_EQ(std::variant_size_v<Shape>, 5u) << "new Shape alternative: hash it (the visitor will not compile)";
 #else
