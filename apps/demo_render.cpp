@@ -5,6 +5,7 @@
 
 #include "align/prepared_scene.h"
 #include "render/forward_render.h"
+#include "render/render_defaults.h"
 #include "render/setup_render.h"
 #include "render/sheet_pattern.h"
 #include "render/transport_map_cache.h"
@@ -21,9 +22,7 @@ DemoRenderSummary run_render_demo(const std::string& folder, const std::string& 
   const PreparedScene ps = prepare_scene(scene_path, "", binning);
   const CameraModel& model = ps.camera().model;
   const RigidTransform& pose = *ps.camera().camera_from_world;
-  TraceOptions options;
-  options.min_weight = 1e-2;  // bench/RESULTS.md: the error it adds is far below the 1-sample aliasing
-  options.reflection_grid = 2;  // as glasspiv render: ghosts interpolated where they agree
+  const TraceOptions options = render_trace_options();  // as glasspiv render
 
   DemoRenderSummary s;
   s.width = model.width_px();

@@ -12,6 +12,7 @@
 #include "apps/commands.h"
 #include "align/prepared_scene.h"
 #include "render/forward_render.h"
+#include "render/render_defaults.h"
 #include "render/setup_render.h"
 #include "render/sheet_pattern.h"
 #include "render/scene_yaml.h"
@@ -30,11 +31,11 @@ struct RenderOptions {
   bool setup = false, no_reflections = false;
   double background = -1, texture_mm_per_px = 0, pattern_mm = 10, particle_density = 2, particle_diameter_mm = 0.2, gain = 1;
   double min_weight = TraceOptions{}.min_weight, min_weight_reflected = TraceOptions{}.min_weight_reflected;
-  // The render's default interpolates ghosts where they agree: on the reactor's
-  // whole camera a fifth less time for an image within 2e-4 RMS of the one
-  // traced whole (bench/RESULTS.md, "The reflection grid").
-  int reflection_grid = 2;
-  double reflection_grid_tolerance = TraceOptions{}.reflection_grid_tolerance;
+  // The render's defaults interpolate ghosts, and whole samples, where the
+  // anchors agree (render/render_defaults.h).
+  int reflection_grid = render_trace_options().reflection_grid;
+  double reflection_grid_tolerance = render_trace_options().reflection_grid_tolerance;
+  bool whole_samples = render_trace_options().grid_whole_samples;
   int max_depth = TraceOptions{}.max_depth, samples = 0, threads = 0, binning = 1;
   std::uint64_t seed = 1;
 };
@@ -138,6 +139,7 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
   options.min_weight_reflected = o.min_weight_reflected;
   options.reflection_grid = o.reflection_grid;
   options.reflection_grid_tolerance = o.reflection_grid_tolerance;
+  options.grid_whole_samples = o.whole_samples;
   options.max_depth = o.max_depth;
   options.reflections = !o.no_reflections;
   const Camera& camera = ps.camera();
@@ -189,9 +191,10 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
                   "%ld reflections not spawned; weight not followed %.3g of a pixel on average\n",
                   st.closed_form_rays, st.branches_cut_by_weight, st.branches_cut_by_depth, st.reflections_skipped,
                   st.cut_weight / map.pixel_count());
-      if (options.reflections && options.reflection_grid > 1)
-        std::printf("reflection grid %d: %ld reflected subtrees interpolated between anchors, not traced\n",
-                    options.reflection_grid, st.subtrees_interpolated);
+      if ((options.reflections || options.grid_whole_samples) && options.reflection_grid > 1)
+        std::printf("reflection grid %d: %ld reflected subtrees and %ld whole samples interpolated between anchors, "
+                    "not traced\n",
+                    options.reflection_grid, st.subtrees_interpolated, st.samples_interpolated);
       if (cached.written)
         std::printf("wrote the transport map %s (%.1f MiB, fingerprint %s)\n", map_path.c_str(),
                     map.memory_bytes() / 1048576.0, fingerprint_hex(cached.fingerprint).c_str());
@@ -265,6 +268,10 @@ void register_render_command(CLI::App& app) {
                 "and of each weight")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  r->add_flag("--whole-samples,!--no-whole-samples", o->whole_samples,
+              "With the reflection grid, interpolate a sample whole (its refracted chain too, no ray traced) where "
+              "its four anchors agree on everything; --no-whole-samples traces every sample's refracted chain "
+              "(default: on)");
   r->add_option("--max-depth", o->max_depth, "Most interface events on one path")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();

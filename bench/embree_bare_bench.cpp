@@ -30,9 +30,10 @@
 // glasspiv: build_transport_map with TraceOptions{reflections = false} and with
 // the default options (reflections on, min_weight 1e-2), and with the
 // correction's (correct/correction_defaults.h: reflections on, min_weight 0.1,
-// what glasspiv correct traces), and the default with the reflection grid 2
-// (the same map with its agreeing reflected subtrees interpolated: fewer
-// segments, so compare its s per MP, not its rate); segments =
+// what glasspiv correct traces), and glasspiv render's default
+// (render/render_defaults.h: the reflection grid 2 with whole samples, the
+// default's map with its agreeing reflected subtrees and samples interpolated:
+// fewer segments, so compare its s per MP, not its rate); segments =
 // map.stats.branches_traced (its closed-form camera rays and its in-glass
 // segments need no BVH query but count as segments).
 #include <embree3/rtcore.h>
@@ -54,6 +55,7 @@
 #include "correct/correction_defaults.h"
 #include "render/parallel_rows.h"
 #include "render/path_tracer.h"
+#include "render/render_defaults.h"
 #include "render/row_camera_rays.h"
 #include "render/scene_yaml.h"
 #include "render/trace_scene_builder.h"
@@ -396,8 +398,9 @@ int main(int argc, char** argv) {
   refraction_only.reflections = false;
   const TraceOptions defaults;
   const TraceOptions correction = correction_trace_options();  // glasspiv correct's maps: reflections, cut at 0.1
-  TraceOptions grid = defaults;  // the default's map with its reflected subtrees interpolated where they agree
-  grid.reflection_grid = 2;
+  // glasspiv render's default: the default's map with reflected subtrees and
+  // whole samples interpolated where the reflection grid's anchors agree.
+  const TraceOptions grid = render_trace_options();
 
   struct Run {
     double seconds = 0;
@@ -458,7 +461,7 @@ int main(int argc, char** argv) {
     row("refraction only", r);
     row("default (reflections, min_weight 1e-2)", d);
     row("correction default (reflections, min_weight 0.1)", c);
-    row("render default: reflection grid 2 (the default's map, fewer segments)", grid_runs.back());
+    row("render default: reflection grid 2, whole samples (the default's map, fewer segments)", grid_runs.back());
     std::fflush(stdout);
   }
 
@@ -517,7 +520,7 @@ int main(int argc, char** argv) {
                            [&](const Run& g, const Run& b, const Run&) { return g.seconds / mp * (b.mseg_per_s() / 17.0); });
   };
   std::printf("\ns per MP scaled to a bare tracer at 17 M segments/s (glasspiv s/MP x bare M seg/s / 17, per rep, "
-              "median): default %.3f, correction default %.3f, default with reflection grid 2 %.3f\n",
+              "median): default %.3f, correction default %.3f, render default (grid 2, whole samples) %.3f\n",
               scaled(def_runs), scaled(corr_runs), scaled(grid_runs));
   {
     // glasspiv unprojects every pixel inside its timed build; the bare time does not.
@@ -548,10 +551,11 @@ int main(int argc, char** argv) {
               corr_stats.camera_rays, corr_stats.branches_traced,
               double(corr_stats.branches_traced) / corr_stats.camera_rays, corr_stats.branches_cut_by_weight,
               corr_stats.branches_cut_by_depth, corr_stats.crossings, corr_map_mib);
-  std::printf("  glasspiv default with reflection grid 2: %ld segments (%.3f per ray), %ld subtrees interpolated, %ld "
-              "crossings; map %.1f MiB\n",
-              grid_stats.branches_traced, double(grid_stats.branches_traced) / grid_stats.camera_rays,
-              grid_stats.subtrees_interpolated, grid_stats.crossings, grid_map_mib);
+  std::printf("  glasspiv render default (reflection grid 2, whole samples): %ld segments (%.3f per camera sample), "
+              "%ld subtrees and %ld samples interpolated, %ld crossings; map %.1f MiB\n",
+              grid_stats.branches_traced,
+              double(grid_stats.branches_traced) / double(grid_stats.camera_rays + grid_stats.samples_interpolated),
+              grid_stats.subtrees_interpolated, grid_stats.samples_interpolated, grid_stats.crossings, grid_map_mib);
   std::printf("  bare vs glasspiv refraction-only segments: %+.4f %%\n",
               100.0 * (double(bare_counts.segments) - refr_stats.branches_traced) / refr_stats.branches_traced);
   std::printf("maps: refraction only %.1f MiB, default %.1f MiB (TransportMap::memory_bytes); peak RSS %.1f MiB "

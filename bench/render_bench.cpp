@@ -113,10 +113,13 @@ void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransfo
       int grid;
       double tolerance;
       bool whole = false;
+      bool reflections = true;  // false: against the refraction-only map traced whole (the row before)
     };
     for (const GridRow& g : {GridRow{1, 0}, GridRow{2, 0.05}, GridRow{2, 0.1}, GridRow{2, 0.25}, GridRow{4, 0.1},
-                             GridRow{2, 0.05, true}, GridRow{2, 0.1, true}, GridRow{4, 0.1, true}}) {
+                             GridRow{2, 0.05, true}, GridRow{2, 0.1, true}, GridRow{4, 0.1, true},
+                             GridRow{1, 0, false, false}, GridRow{2, 0.1, true, false}}) {
       TraceOptions options;
+      options.reflections = g.reflections;
       options.reflection_grid = g.grid;
       options.grid_whole_samples = g.whole;
       if (g.grid > 1) options.reflection_grid_tolerance = g.tolerance;
@@ -140,12 +143,17 @@ void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransfo
       char tolerance[16] = "";
       if (g.grid > 1) std::snprintf(tolerance, sizeof tolerance, "%g", g.tolerance);
       const double samples = double(m.stats.camera_rays + m.stats.samples_interpolated);
-      std::printf("| %d | %d | %s | %s | %.3f | %.2f | %.2f | %.1f %% | %.2e | %.4f | %.5f |", k, g.grid, tolerance,
-                  g.whole ? "yes" : "", seconds / mp, double(m.stats.branches_traced) / samples,
+      std::printf("| %d%s | %d | %s | %s | %.3f | %.2f | %.2f | %.1f %% | %.2e | %.4f | %.5f |", k, g.reflections ? "" : ", refraction only", g.grid,
+                  tolerance, g.whole ? "yes" : "", seconds / mp, double(m.stats.branches_traced) / samples,
                   double(m.stats.subtrees_interpolated) / samples, 100.0 * m.stats.samples_interpolated / samples,
                   rms_difference(image, whole_image),
                   largest, light / whole_light);
-      if (reference) std::printf(" %.4f |", rms_difference(image, *reference));
+      if (reference) {
+        if (g.reflections)
+          std::printf(" %.4f |", rms_difference(image, *reference));
+        else
+          std::printf(" - |");
+      }
       std::printf(" %.2e | %.4f |\n", correction.rms(corrected, whole_corrected), correction.rms(corrected, correction.truth));
     }
   }

@@ -169,8 +169,12 @@ grep -q "another setup" "$work/out" && ok || fail "a reflected cut-off above --m
 # The reflection grid traces another map, and says what it interpolated.
 expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/lens5.png" --map "$work/lens5.tmap" --reflection-grid 1
 expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/lens5.png" --map "$work/lens5.tmap" --reflection-grid 2
-grep -q "another setup" "$work/out" && grep -q "reflection grid 2: [0-9]* reflected subtrees interpolated" "$work/out" \
+grep -q "another setup" "$work/out" && grep -q "reflection grid 2: [0-9]* reflected subtrees and [1-9][0-9]* whole samples interpolated" "$work/out" \
   && ok || fail "--reflection-grid 2 reused the map or did not report: $(cat "$work/out")"
+# Whole samples are the default; without them, another map, every chain traced.
+expect_ok "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/lens5.png" --map "$work/lens5.tmap" --no-whole-samples
+grep -q "another setup" "$work/out" && grep -q "reflection grid 2: [0-9]* reflected subtrees and 0 whole samples" "$work/out" \
+  && ok || fail "--no-whole-samples reused the map or interpolated samples: $(cat "$work/out")"
 expect_error 2 "--reflection-grid" -- "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/x.tif" --reflection-grid 0
 expect_error 2 "--reflection-grid-tolerance" -- "$glasspiv" render "$work/lens.yaml" --sheet-pattern checker -o "$work/x.tif" --reflection-grid-tolerance -1
 expect_ok "$glasspiv" render "$work/lens.yaml" --setup -o "$work/setup.png" --format 8 --background 1
