@@ -191,7 +191,7 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
                   "%ld reflections not spawned; weight not followed %.3g of a pixel on average\n",
                   st.closed_form_rays, st.branches_cut_by_weight, st.branches_cut_by_depth, st.reflections_skipped,
                   st.cut_weight / map.pixel_count());
-      if ((options.reflections || options.grid_whole_samples) && options.reflection_grid > 1)
+      if (reflection_grid_in_effect(options))
         std::printf("reflection grid %d: %ld reflected subtrees and %ld whole samples interpolated between anchors, "
                     "not traced\n",
                     options.reflection_grid, st.subtrees_interpolated, st.samples_interpolated);

@@ -84,6 +84,12 @@ struct TraceOptions {
   bool grid_whole_samples = false;
 };
 
+// Whether build_transport_map uses the reflection grid: g > 1 and something
+// for it to interpolate (reflected subtrees, or whole samples).
+inline bool reflection_grid_in_effect(const TraceOptions& o) {
+  return o.reflection_grid > 1 && (o.reflections || o.grid_whole_samples);
+}
+
 // Interface events on the path before the crossing: none, refractions only,
 // at least one reflection (total internal reflection included).
 enum class CrossingTag { direct, refracted_only, with_reflections };

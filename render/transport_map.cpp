@@ -327,7 +327,7 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
                                   const std::function<void(int, int)>& progress) {
   const int height = camera.height_px();
   std::vector<RowBuffer> rows(static_cast<std::size_t>(height));
-  if (options.reflection_grid == 1 || !(options.reflections || options.grid_whole_samples)) {
+  if (!reflection_grid_in_effect(options)) {
     // trace_ray throws only for non-finite rays, which pixel_camera_ray never produces.
     *threads = parallel_rows(
         height, *threads,

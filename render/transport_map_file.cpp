@@ -312,7 +312,7 @@ std::uint64_t transport_map_fingerprint(const TraceScene& scene, const CameraMod
   // Only where it changes what is traced: maps made before the option existed
   // keep their fingerprint.
   if (options.min_weight_reflected > options.min_weight) h.f64(options.min_weight_reflected);
-  if ((options.reflections || options.grid_whole_samples) && options.reflection_grid > 1) {
+  if (reflection_grid_in_effect(options)) {
     h.i32(options.reflection_grid);
     h.f64(options.reflection_grid_tolerance);
     if (options.grid_whole_samples) h.boolean(true);

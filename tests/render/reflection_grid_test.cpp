@@ -160,16 +160,22 @@ TraceResult quadratic_anchor(double col, double row, std::uint64_t id = 77) {
   return r;
 }
 
-// Anchor rows of one cell at the origin, corner c's trace changed by `edit`.
-template <typename Edit>
-std::pair<AnchorRow, AnchorRow> cell_rows(int corner, Edit edit) {
+// Anchor rows of one cell at the origin, each corner's trace make(col, row),
+// corner c's changed by `edit`.
+template <typename Make, typename Edit>
+std::pair<AnchorRow, AnchorRow> cell_rows_of(Make make, int corner, Edit edit) {
   AnchorRow top, bottom;
   for (int i = 0; i < 4; ++i) {
-    TraceResult r = quadratic_anchor((i & 1) * kCellPx, (i >> 1) * kCellPx);
+    TraceResult r = make((i & 1) * kCellPx, (i >> 1) * kCellPx);
     if (i == corner) edit(r);
     (i < 2 ? top : bottom).add(&r, 1.0);
   }
   return {std::move(top), std::move(bottom)};
+}
+
+template <typename Edit>
+std::pair<AnchorRow, AnchorRow> cell_rows(int corner, Edit edit) {
+  return cell_rows_of([](double col, double row) { return quadratic_anchor(col, row); }, corner, edit);
 }
 
 std::vector<std::uint64_t> agreeing(const std::pair<AnchorRow, AnchorRow>& rows, double tolerance = 0.1) {
@@ -263,13 +269,7 @@ TraceResult whole_anchor(double col, double row) {
 
 template <typename Edit>
 std::pair<AnchorRow, AnchorRow> whole_rows(int corner, Edit edit) {
-  AnchorRow top, bottom;
-  for (int i = 0; i < 4; ++i) {
-    TraceResult r = whole_anchor((i & 1) * kCellPx, (i >> 1) * kCellPx);
-    if (i == corner) edit(r);
-    (i < 2 ? top : bottom).add(&r, 1.0);
-  }
-  return {std::move(top), std::move(bottom)};
+  return cell_rows_of(whole_anchor, corner, edit);
 }
 
 // Whether the cell agrees whole (cell_agrees_whole after agreeing_subtrees).
