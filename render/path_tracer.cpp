@@ -30,6 +30,11 @@ struct Branch {
   int subtree;         // SheetCrossing::subtree
   int depth;
   int medium;  // kFluid or the index of the solid the branch is in
+  // In the fluid: the sphere the branch leaves from its surface, outwards
+  // (d . n > 0), which the ray cannot meet again (|f + t d| grows with t > 0
+  // for f . d > 0; tests/render/shapes_test.cpp, SpawnOrigin, checks it in
+  // double down to grazing rays), so the index does not test it; -1: none.
+  int departed;
   bool any_event;
   bool any_reflection;
   bool initial;
@@ -211,6 +216,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
   first.subtree = -1;
   first.depth = 0;
   first.medium = kFluid;
+  first.departed = -1;
   first.any_event = first.any_reflection = false;
   first.initial = true;
   const Eigen::Vector3d sheet_normal = scene.sheet.normal();
@@ -259,7 +265,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
           ++result.counts.closed_form;  // nothing to meet: straight to the sheet and the background
           return std::nullopt;
         }
-        return index.first_hit(b.origin, b.direction, b.initial ? initial_t_min : 0.0);
+        return index.first_hit(b.origin, b.direction, b.initial ? initial_t_min : 0.0, b.departed);
       }
       // Solids do not overlap: inside one, the next surface is its own.
       std::optional<Hit> h =
@@ -358,7 +364,12 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
     if (tir) ++result.counts.tir_events;
     const double reflectance = tir ? 1.0 : fr.unpolarized;
 
-    auto child = [&](Branch& c) -> Branch& {  // direction, origin, weight, medium, any_reflection: by the caller
+    const bool sphere = std::holds_alternative<Sphere>(solid.shape);
+    // The solid a child leaves, or -1 (Branch::departed).
+    auto departs = [&](const Eigen::Vector3d& direction, int medium) {
+      return sphere && medium == kFluid && direction.dot(hit->normal) > 0 ? hit->shape_index : -1;
+    };
+    auto child = [&](Branch& c) -> Branch& {  // direction, origin, weight, medium, departed, any_reflection: by the caller
       c.anchor = hit->point;
       c.danchor = dpoint;
       c.depth = b.depth + 1;
@@ -394,6 +405,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
           st.weight = w_reflected;
         }
         r.medium = seg_medium;
+        r.departed = departs(r.direction, r.medium);
         r.any_reflection = true;
       }
     }
@@ -408,6 +420,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
       t.path = extend_path(b.path, hit->shape_index, false);
       t.subtree = b.subtree;
       t.medium = other_medium;
+      t.departed = departs(t.direction, t.medium);
       t.any_reflection = b.any_reflection;
       current = 1 - current;
       have_current = true;

@@ -46,9 +46,9 @@ bool SceneIndex::may_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d) con
 
 LinearSceneIndex::LinearSceneIndex(std::vector<Shape> shapes) : SceneIndex(shapes), shapes_(std::move(shapes)) {}
 
-std::optional<Hit> LinearSceneIndex::first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                                               double t_min) const {
-  return glasspiv::first_hit(shapes_, o, d, t_min);  // nearest, ties to the lower index
+std::optional<Hit> LinearSceneIndex::first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min,
+                                               int skip_index) const {
+  return glasspiv::first_hit(shapes_, o, d, t_min, skip_index);  // nearest, ties to the lower index
 }
 
 // ---------------------------------------------------------------------------
@@ -78,6 +78,7 @@ struct QueryContext {
   const Eigen::Vector3d* o;
   const Eigen::Vector3d* d;
   double t_min;
+  int skip_index;
   bool have_best = false;
   double best_t = 0;
   int best_index = -1;
@@ -101,6 +102,7 @@ void solid_intersect(const RTCIntersectFunctionNArguments* args) {
   if (!args->valid[0]) return;
   auto* q = reinterpret_cast<QueryContext*>(args->context);
   const int index = static_cast<int>(args->primID);
+  if (index == q->skip_index) return;
   double t;
   std::optional<Hit> other;
   if (const Sphere* sphere = (*q->sphere_of)[args->primID]) {
@@ -165,8 +167,8 @@ EmbreeSceneIndex::~EmbreeSceneIndex() {
   if (impl_ && impl_->scene) rtcReleaseScene(impl_->scene);
 }
 
-std::optional<Hit> EmbreeSceneIndex::first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                                               double t_min) const {
+std::optional<Hit> EmbreeSceneIndex::first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min,
+                                               int skip_index) const {
   QueryContext q;
   rtcInitIntersectContext(&q.base);
   q.shapes = &impl_->shapes;
@@ -174,6 +176,7 @@ std::optional<Hit> EmbreeSceneIndex::first_hit(const Eigen::Vector3d& o, const E
   q.o = &o;
   q.d = &d;
   q.t_min = t_min;
+  q.skip_index = skip_index;
   RTCRayHit rh;
   rh.ray.org_x = static_cast<float>(o.x());
   rh.ray.org_y = static_cast<float>(o.y());

@@ -19,8 +19,11 @@ class SceneIndex {
  public:
   virtual ~SceneIndex() = default;
   // The nearest hit with t > t_min over all solids (d unit); ties go to the
-  // lower solid index. shape_index is set.
-  virtual std::optional<Hit> first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min) const = 0;
+  // lower solid index. shape_index is set. Solid skip_index is not tested
+  // (-1: every solid is): the tracer names the sphere a ray leaves from its
+  // surface, which that ray cannot meet again.
+  virtual std::optional<Hit> first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min,
+                                       int skip_index = -1) const = 0;
   // Bounds of every solid together (empty box for no solids).
   const Eigen::AlignedBox3d& bounds_mm() const { return bounds_; }
   // The largest scale_mm() of the solids (0 for none): sizes the guard of rays
@@ -39,7 +42,8 @@ class SceneIndex {
 class LinearSceneIndex final : public SceneIndex {
  public:
   explicit LinearSceneIndex(std::vector<Shape> shapes);
-  std::optional<Hit> first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min) const override;
+  std::optional<Hit> first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min,
+                               int skip_index = -1) const override;
 
  private:
   std::vector<Shape> shapes_;
@@ -53,7 +57,8 @@ class EmbreeSceneIndex final : public SceneIndex {
   ~EmbreeSceneIndex() override;
   EmbreeSceneIndex(const EmbreeSceneIndex&) = delete;
   EmbreeSceneIndex& operator=(const EmbreeSceneIndex&) = delete;
-  std::optional<Hit> first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min) const override;
+  std::optional<Hit> first_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min,
+                               int skip_index = -1) const override;
 
  private:
   struct Impl;

@@ -222,9 +222,10 @@ std::optional<Hit> intersect(const Shape& s, const Eigen::Vector3d& o, const Eig
 }
 
 std::optional<Hit> first_hit(const std::vector<Shape>& shapes, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                             double t_min) {
+                             double t_min, int skip_index) {
   std::optional<Hit> best;
   for (std::size_t i = 0; i < shapes.size(); ++i) {
+    if (static_cast<int>(i) == skip_index) continue;
     auto h = intersect(shapes[i], o, d, t_min);
     if (h && (!best || h->t < best->t)) {
       h->shape_index = static_cast<int>(i);

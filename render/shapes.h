@@ -81,9 +81,10 @@ std::optional<Hit> intersect(const Cylinder& c, const Eigen::Vector3d& o, const 
 std::optional<Hit> intersect(const Rectangle& r, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min);
 std::optional<Hit> intersect(const Shape& s, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_min);
 
-// The nearest hit over all shapes (ties: the lower index), shape_index set.
+// The nearest hit over all shapes (ties: the lower index), shape_index set;
+// shapes[skip_index] is not tested (-1: every shape is).
 std::optional<Hit> first_hit(const std::vector<Shape>& shapes, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                             double t_min);
+                             double t_min, int skip_index = -1);
 
 // Axis-aligned world bounds of the solid (exact for spheres and rectangles,
 // tight for boxes and cylinders).

@@ -169,6 +169,14 @@ TEST(SceneIndex, EmbreeMatchesLinearSearchBitForBit) {
     EXPECT_EQ(a->shape_index, b->shape_index);
     EXPECT_EQ(a->t, b->t);
     EXPECT_EQ(a->point, b->point);
+    // With the nearest solid skipped, both find the same one behind it.
+    const auto a2 = linear.first_hit(o, d, 0.0, a->shape_index), b2 = embree.first_hit(o, d, 0.0, a->shape_index);
+    ASSERT_EQ(a2.has_value(), b2.has_value()) << i;
+    if (!a2) continue;
+    EXPECT_NE(a2->shape_index, a->shape_index);
+    EXPECT_EQ(a2->shape_index, b2->shape_index);
+    EXPECT_EQ(a2->t, b2->t);
+    EXPECT_GE(a2->t, a->t);
   }
   EXPECT_GT(hits, 2000);
   // Whole paths through the packing, every branch.

@@ -242,6 +242,11 @@ TEST(FirstHit, NearestOverShapesWithIndex) {
   EXPECT_EQ(h->shape_index, 1);
   EXPECT_NEAR(h->t, 15.0, 1e-13);
   EXPECT_FALSE(first_hit(shapes, Vector3d(0, 0, 0), Vector3d(0, 0, -1), 0.0));
+  // A skipped shape is not tested: the next one behind it is the nearest.
+  const auto behind = first_hit(shapes, Vector3d(0, 0, 0), Vector3d(0, 0, 1), 0.0, 1);
+  ASSERT_TRUE(behind);
+  EXPECT_EQ(behind->shape_index, 0);
+  EXPECT_NEAR(behind->t, 45.0, 1e-13);
   EXPECT_TRUE(contains(shapes[0], Vector3d(0, 0, 52)));
   EXPECT_FALSE(contains(shapes[0], Vector3d(0, 0, 56)));
   EXPECT_TRUE(contains(shapes[2], Vector3d(40, -40, 100.5)));
