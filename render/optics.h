@@ -52,6 +52,16 @@ struct FresnelReflectance {
 // interface) gives 0.
 FresnelReflectance fresnel_dielectric(double cos_incident, double n_i, double n_t);
 
+// Both at one interface, sharing the cosine of refraction: to the bit
+// fresnel_dielectric(d . n, n_i, n_t) and refract(d, n, n_i / n_t), the
+// direction empty on total internal reflection (the tracer's one call per
+// interface).
+struct Refraction {
+  FresnelReflectance reflectance;
+  std::optional<Eigen::Vector3d> direction;
+};
+Refraction refract_with_fresnel(const Eigen::Vector3d& d, const Eigen::Vector3d& n, double n_i, double n_t);
+
 // Critical angle of total internal reflection, theta_c = asin(n_t / n_i), for
 // light going from the denser medium n_i into n_t. std::nullopt when
 // n_i <= n_t: no angle of incidence is totally reflected.

@@ -357,12 +357,11 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
     const Diff dnormal = fell_back ? Diff::Zero() : Diff(hit->dnormal_dpoint * dpoint);
     const double ndn = b.direction.dot(normal);
 
-    const FresnelReflectance fr = fresnel_dielectric(std::abs(ndn), n1, n2);
-    std::optional<Eigen::Vector3d> refracted;
-    if (!fr.total_internal_reflection) refracted = refract(b.direction, normal, n1 / n2);
-    const bool tir = !refracted;  // refract and fresnel_dielectric share the TIR test
+    const Refraction interface = refract_with_fresnel(b.direction, normal, n1, n2);
+    const std::optional<Eigen::Vector3d>& refracted = interface.direction;
+    const bool tir = !refracted;
     if (tir) ++result.counts.tir_events;
-    const double reflectance = tir ? 1.0 : fr.unpolarized;
+    const double reflectance = tir ? 1.0 : interface.reflectance.unpolarized;
 
     const bool sphere = std::holds_alternative<Sphere>(solid.shape);
     // The solid a child leaves, or -1 (Branch::departed).

@@ -258,6 +258,36 @@ TEST(Fresnel, TotalInternalReflectionGivesOne) {
   }
 }
 
+// The tracer's one call per interface is the two functions to the bit, over
+// every angle (grazing and the critical angle included), both orientations of
+// the normal and every index pair (TIR and index matching included).
+TEST(RefractWithFresnel, IsRefractAndFresnelToTheBit) {
+  const Eigen::Matrix3d r = tilted_frame();
+  const Eigen::Vector3d n = r * Eigen::Vector3d::UnitZ();
+  int tir = 0, refracted = 0;
+  for (const IndexPair& p : index_pairs())
+    for (double deg : angles_deg())
+      for (double sign : {1.0, -1.0}) {
+        const Eigen::Vector3d d = incident(deg * kDeg, r), normal = sign * n;
+        const Refraction both = refract_with_fresnel(d, normal, p.n1, p.n2);
+        const FresnelReflectance f = fresnel_dielectric(d.dot(normal), p.n1, p.n2);
+        const std::optional<Eigen::Vector3d> t = refract(d, normal, p.n1 / p.n2);
+        EXPECT_EQ(both.reflectance.total_internal_reflection, f.total_internal_reflection);
+        EXPECT_EQ(both.reflectance.rs, f.rs);
+        EXPECT_EQ(both.reflectance.rp, f.rp);
+        EXPECT_EQ(both.reflectance.unpolarized, f.unpolarized);
+        ASSERT_EQ(both.direction.has_value(), t.has_value()) << deg << " " << p.n1 << " -> " << p.n2;
+        if (t) {
+          EXPECT_EQ(*both.direction, *t);
+          ++refracted;
+        } else {
+          ++tir;
+        }
+      }
+  EXPECT_GT(tir, 100);
+  EXPECT_GT(refracted, 1000);
+}
+
 // theta_c = asin(n_t / n_i): N-BK7 -> air at 532 nm, n = 1.5195, about 41.1 deg.
 TEST(CriticalAngle, NBK7ToAir) {
   const double g = n_bk7_532();
