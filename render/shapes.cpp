@@ -68,9 +68,17 @@ std::optional<double> sphere_hit_t(const Sphere& s, const Eigen::Vector3d& o, co
   const double sq = std::sqrt(disc);
   const double q = -(b + std::copysign(sq, b));
   const double c = f.squaredNorm() - r * r;
-  double t0 = q, t1 = (q != 0) ? c / q : -q;
-  if (t0 > t1) std::swap(t0, t1);
-  const double t = t0 > t_min ? t0 : t1;
+  double t;
+  if (t_min >= 0 && ((q > 0 && c <= 0) || (q < 0 && c >= 0))) {
+    // The root c / q is <= 0 <= t_min here (its sign is c's times q's), so
+    // the answer is q or a miss, as below, without the division: the common
+    // case of a ray inside the sphere (c < 0) and of one moving away (q < 0).
+    t = q;
+  } else {
+    double t0 = q, t1 = (q != 0) ? c / q : -q;
+    if (t0 > t1) std::swap(t0, t1);
+    t = t0 > t_min ? t0 : t1;
+  }
   if (!(t > t_min)) return std::nullopt;
   // sphere_hit normalises f + t d: a zero vector (never seen) is a miss.
   if (!((f + t * d).squaredNorm() > 0)) return std::nullopt;

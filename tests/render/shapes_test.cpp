@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <optional>
 #include <random>
 
 #include "render/optics.h"
@@ -69,6 +70,41 @@ TEST(Sphere, FarFromOriginStillAccurate) {
 // reflected) ray spawned inside meets it next at the far end of its chord,
 // 2 R |d . n| away, never at t ~ 0. Spheres far from the origin, hit at
 // grazing angles down to impact parameters R (1 - 1e-12).
+// sphere_hit_t skips the division where the root it gives cannot be the
+// answer; the answer stays that of both roots sorted, to the bit, from inside,
+// outside, moving away, grazing, and with t_min 0 and above.
+TEST(Sphere, HitTIsTheNearestRootAboveTMinToTheBit) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const Sphere s{Vector3d(3, -2, 40), 20};
+  int hits = 0, inside = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Vector3d o = s.centre_mm + Vector3d(u(rng), u(rng), u(rng)) * (i % 2 ? 25.0 : 19.0);
+    const Vector3d d = Vector3d(u(rng), u(rng), u(rng)).normalized();
+    const double t_min = i % 3 == 0 ? 0.0 : std::abs(u(rng)) * 5;
+    // The reference: both roots of sphere_roots' form, the nearer one above t_min.
+    const Vector3d f = o - s.centre_mm;
+    const double b = f.dot(d), l = (f - b * d).norm(), disc = (s.radius_mm - l) * (s.radius_mm + l);
+    std::optional<double> expected;
+    if (disc > 0) {
+      const double q = -(b + std::copysign(std::sqrt(disc), b));
+      const double c = f.squaredNorm() - s.radius_mm * s.radius_mm;
+      double t0 = q, t1 = q != 0 ? c / q : -q;
+      if (t0 > t1) std::swap(t0, t1);
+      const double t = t0 > t_min ? t0 : t1;
+      if (t > t_min) expected = t;
+    }
+    const std::optional<double> got = sphere_hit_t(s, o, d, t_min);
+    ASSERT_EQ(got.has_value(), expected.has_value()) << i;
+    if (!got) continue;
+    EXPECT_EQ(*got, *expected) << i;
+    ++hits;
+    inside += f.norm() < s.radius_mm;
+  }
+  EXPECT_GT(hits, 5000);
+  EXPECT_GT(inside, 2000);
+}
+
 TEST(SpawnOrigin, NoSelfHitOnGrazingSphereHits) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
