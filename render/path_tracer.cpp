@@ -357,11 +357,11 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
     const Diff dnormal = fell_back ? Diff::Zero() : Diff(hit->dnormal_dpoint * dpoint);
     const double ndn = b.direction.dot(normal);
 
-    const Refraction interface = refract_with_fresnel(b.direction, normal, n1, n2);
-    const std::optional<Eigen::Vector3d>& refracted = interface.direction;
+    const Refraction split = refract_with_fresnel(b.direction, normal, n1, n2);
+    const std::optional<Eigen::Vector3d>& refracted = split.direction;
     const bool tir = !refracted;
     if (tir) ++result.counts.tir_events;
-    const double reflectance = tir ? 1.0 : interface.reflectance.unpolarized;
+    const double reflectance = tir ? 1.0 : split.reflectance.unpolarized;
 
     const bool sphere = std::holds_alternative<Sphere>(solid.shape);
     // The solid a child leaves, or -1 (Branch::departed).
