@@ -34,6 +34,17 @@ FresnelReflectance fresnel_of_cosines(double cos_i, double cos_t, double n_i, do
   return r;
 }
 
+// The normal turned to face the incoming ray (against d), and cos_i = -d . m
+// clamped to [0, 1].
+struct Incidence {
+  Eigen::Vector3d m;
+  double cos_i;
+};
+Incidence incidence(const Eigen::Vector3d& d, const Eigen::Vector3d& n) {
+  const double cos_i = -d.dot(n);
+  return {cos_i >= 0 ? n : Eigen::Vector3d(-n), std::min(std::abs(cos_i), 1.0)};
+}
+
 // The unit refracted direction, m the normal facing the ray.
 Eigen::Vector3d refracted_direction(const Eigen::Vector3d& d, const Eigen::Vector3d& m, double eta, double cos_i,
                                     double cos_t) {
@@ -48,13 +59,10 @@ Eigen::Vector3d refracted_direction(const Eigen::Vector3d& d, const Eigen::Vecto
 Eigen::Vector3d reflect(const Eigen::Vector3d& d, const Eigen::Vector3d& n) { return d - 2.0 * d.dot(n) * n; }
 
 std::optional<Eigen::Vector3d> refract(const Eigen::Vector3d& d, const Eigen::Vector3d& n, double eta_ratio) {
-  // Turn the normal to face the incoming ray (against d).
-  double cos_i = -d.dot(n);
-  const Eigen::Vector3d m = cos_i >= 0 ? n : Eigen::Vector3d(-n);
-  cos_i = std::min(std::abs(cos_i), 1.0);
-  const double sin2_t = sin2_transmitted(cos_i, eta_ratio);
+  const Incidence in = incidence(d, n);
+  const double sin2_t = sin2_transmitted(in.cos_i, eta_ratio);
   if (sin2_t > 1.0) return std::nullopt;  // total internal reflection
-  return refracted_direction(d, m, eta_ratio, cos_i, cos_transmitted(sin2_t));
+  return refracted_direction(d, in.m, eta_ratio, in.cos_i, cos_transmitted(sin2_t));
 }
 
 FresnelReflectance fresnel_dielectric(double cos_incident, double n_i, double n_t) {
@@ -71,19 +79,17 @@ FresnelReflectance fresnel_dielectric(double cos_incident, double n_i, double n_
 
 Refraction refract_with_fresnel(const Eigen::Vector3d& d, const Eigen::Vector3d& n, double n_i, double n_t) {
   assert(n_i > 0.0 && n_t > 0.0);
-  const double dn = d.dot(n);
-  const Eigen::Vector3d m = -dn >= 0 ? n : Eigen::Vector3d(-n);
-  const double cos_i = std::min(std::abs(dn), 1.0);
+  const Incidence in = incidence(d, n);
   const double eta = n_i / n_t;
-  const double sin2_t = sin2_transmitted(cos_i, eta);
+  const double sin2_t = sin2_transmitted(in.cos_i, eta);
   Refraction out;
   if (sin2_t > 1.0) {
     out.reflectance.total_internal_reflection = true;
     return out;
   }
   const double cos_t = cos_transmitted(sin2_t);
-  out.reflectance = fresnel_of_cosines(cos_i, cos_t, n_i, n_t);
-  out.direction = refracted_direction(d, m, eta, cos_i, cos_t);
+  out.reflectance = fresnel_of_cosines(in.cos_i, cos_t, n_i, n_t);
+  out.direction = refracted_direction(d, in.m, eta, in.cos_i, cos_t);
   return out;
 }
 
