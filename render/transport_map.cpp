@@ -15,6 +15,7 @@
 #include "render/reflection_grid.h"
 #include "render/row_camera_rays.h"
 #include "render/trace_scene_builder.h"
+#include "util/huge_pages.h"
 
 namespace glasspiv {
 
@@ -59,22 +60,33 @@ struct RowStats {
   }
 };
 
+// The map's per-pixel arrays, written in place by the rows: each pixel's
+// crossing count (in pixel_offsets[p + 1], summed into offsets once every row
+// is done), its escaped and its opaque weight.
+struct PixelArrays {
+  std::uint32_t* counts = nullptr;
+  float* background = nullptr;
+  float* opaque = nullptr;
+  int width = 0;
+};
+
 struct RowBuffer {
-  std::vector<std::uint32_t> counts;  // crossings per pixel of the row
-  std::vector<float> s, t, w, ds_dcol, ds_drow, dt_dcol, dt_drow;
+  std::uint32_t* counts = nullptr;  // the row's slices of PixelArrays
+  float *background = nullptr, *opaque = nullptr;
+  std::vector<float> s, t, w, ds_dcol, ds_drow, dt_dcol, dt_drow;  // the row's crossings
   std::vector<std::uint8_t> tag;
-  std::vector<float> background, opaque;
   RowStats stats;
 
   void clear() {
     for (auto* v : {&s, &t, &w, &ds_dcol, &ds_drow, &dt_dcol, &dt_drow}) v->clear();
     tag.clear();
   }
-  // The per-pixel arrays of a row `width` pixels wide, zeroed.
-  void start_row(int width) {
-    counts.assign(static_cast<std::size_t>(width), 0);
-    background.assign(static_cast<std::size_t>(width), 0.0f);
-    opaque.assign(static_cast<std::size_t>(width), 0.0f);
+  // Row `row`'s per-pixel entries go to its slices of `pixels`.
+  void start_row(const PixelArrays& pixels, int row) {
+    const std::size_t first = static_cast<std::size_t>(row) * static_cast<std::size_t>(pixels.width);
+    counts = pixels.counts + first;
+    background = pixels.background + first;
+    opaque = pixels.opaque + first;
   }
   void push(const GridCrossing& c) {
     s.push_back(c.s_mm);
@@ -153,7 +165,7 @@ struct SampleLattice {
 
 void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
                const RigidTransform& camera_from_world, const TraceOptions& options, int k, int row,
-               RowBuffer* out) {
+               const PixelArrays& pixels, RowBuffer* out) {
   thread_local TraceResult r;  // reused: no allocation per ray
   // The row's crossings grow here, in one buffer per thread that keeps its
   // capacity from row to row, and are copied to the row once, at their size.
@@ -161,7 +173,7 @@ void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraMod
   scratch.clear();
   const int width = camera.width_px();
   const double inv_samples = 1.0 / (static_cast<double>(k) * k);
-  out->start_row(width);
+  out->start_row(pixels, row);
   RowCameraRays rays(camera, camera_from_world, row, k);
   for (int col = 0; col < width; ++col) {
     PixelSums pixel;
@@ -220,7 +232,7 @@ struct CellRow {
 void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
                        const RigidTransform& camera_from_world, const TraceOptions& options,
                        const SampleLattice& lattice, const std::vector<AnchorRow>& anchors,
-                       const std::vector<CellRow>& cells, int row, RowBuffer* out) {
+                       const std::vector<CellRow>& cells, int row, const PixelArrays& pixel_arrays, RowBuffer* out) {
   thread_local TraceResult r;
   thread_local RowBuffer scratch;
   thread_local std::vector<Eigen::Vector2d> pixels;
@@ -243,7 +255,7 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
       }
   pixel_camera_rays(camera, camera_from_world, pixels, &rays);
   std::size_t next_ray = 0;
-  out->start_row(width);
+  out->start_row(pixel_arrays, row);
   for (int col = 0; col < width; ++col) {
     PixelSums pixel;
     for (int sy = 0; sy < k; ++sy) {
@@ -323,7 +335,7 @@ std::pair<int, int> anchor_rows_of(const SampleLattice& lattice, int row) {
 // The rows of a map: traced sample by sample, or with the reflection grid.
 std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
                                   const RigidTransform& camera_from_world, const TraceOptions& options, int k,
-                                  int* threads, std::vector<RowStats>* anchor_stats,
+                                  const PixelArrays& pixels, int* threads, std::vector<RowStats>* anchor_stats,
                                   const std::function<void(int, int)>& progress) {
   const int height = camera.height_px();
   std::vector<RowBuffer> rows(static_cast<std::size_t>(height));
@@ -332,7 +344,8 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
     *threads = parallel_rows(
         height, *threads,
         [&](int row) {
-          trace_row(scene, index, camera, camera_from_world, options, k, row, &rows[static_cast<std::size_t>(row)]);
+          trace_row(scene, index, camera, camera_from_world, options, k, row, pixels,
+                    &rows[static_cast<std::size_t>(row)]);
         },
         progress);
     return rows;
@@ -402,7 +415,7 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
                                       end_row - first_row, requested_threads,
                                       [&](int i) {
                                         trace_row_on_grid(scene, index, camera, camera_from_world, options, lattice,
-                                                          anchors, cells, first_row + i,
+                                                          anchors, cells, first_row + i, pixels,
                                                           &rows[static_cast<std::size_t>(first_row + i)]);
                                       },
                                       report()));
@@ -430,32 +443,41 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
     throw std::invalid_argument("build_transport_map: reflection_grid_tolerance must be finite and >= 0");
 
   const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
-  std::vector<RowStats> anchor_stats;  // the reflection grid's anchor rows
-  std::vector<RowBuffer> rows =
-      trace_rows(scene, *index, camera, camera_from_world, options, samples_per_axis, &threads, &anchor_stats, progress);
-
   TransportMap map;
   map.width = width;
   map.height = height;
   map.samples_per_axis = samples_per_axis;
+  // The per-pixel arrays at their final size: the rows write their entries
+  // there (no row copies, no second pass over them).
+  const std::size_t pixel_count = map.pixel_count();
+  reserve_huge(&map.pixel_offsets, pixel_count + 1);
+  reserve_huge(&map.background_weight, pixel_count);
+  reserve_huge(&map.opaque_weight, pixel_count);
+  map.pixel_offsets.resize(pixel_count + 1);
+  map.background_weight.resize(pixel_count);
+  map.opaque_weight.resize(pixel_count);
+  PixelArrays pixels;
+  pixels.counts = map.pixel_offsets.data() + 1;
+  pixels.background = map.background_weight.data();
+  pixels.opaque = map.opaque_weight.data();
+  pixels.width = width;
+  std::vector<RowStats> anchor_stats;  // the reflection grid's anchor rows
+  std::vector<RowBuffer> rows = trace_rows(scene, *index, camera, camera_from_world, options, samples_per_axis,
+                                           pixels, &threads, &anchor_stats, progress);
+
   map.stats.threads = threads;
   std::size_t total = 0;
   for (const RowBuffer& rb : rows) total += rb.w.size();
   if (total > std::numeric_limits<std::uint32_t>::max())
     throw std::overflow_error("build_transport_map: more than 2^32 - 1 crossings");
-  map.pixel_offsets.reserve(map.pixel_count() + 1);
-  map.s_mm.reserve(total);
-  map.t_mm.reserve(total);
-  map.weight.reserve(total);
-  map.tag.reserve(total);
-  for (auto* v : {&map.ds_dcol, &map.ds_drow, &map.dt_dcol, &map.dt_drow}) v->reserve(total);
-  map.background_weight.reserve(map.pixel_count());
-  map.opaque_weight.reserve(map.pixel_count());
+  // Counts to offsets (no overflow: the sum is total).
   std::uint32_t offset = 0;
+  for (std::size_t p = 1; p <= pixel_count; ++p) map.pixel_offsets[p] = offset += map.pixel_offsets[p];
+  for (auto* v : {&map.s_mm, &map.t_mm, &map.weight, &map.ds_dcol, &map.ds_drow, &map.dt_dcol, &map.dt_drow})
+    reserve_huge(v, total);
+  reserve_huge(&map.tag, total);
   [[maybe_unused]] int rows_freed = 0;
-  map.pixel_offsets.push_back(0);
   for (RowBuffer& rb : rows) {
-    for (std::uint32_t c : rb.counts) map.pixel_offsets.push_back(offset += c);
     map.s_mm.insert(map.s_mm.end(), rb.s.begin(), rb.s.end());
     map.t_mm.insert(map.t_mm.end(), rb.t.begin(), rb.t.end());
     map.weight.insert(map.weight.end(), rb.w.begin(), rb.w.end());
@@ -464,8 +486,6 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
     map.ds_drow.insert(map.ds_drow.end(), rb.ds_drow.begin(), rb.ds_drow.end());
     map.dt_dcol.insert(map.dt_dcol.end(), rb.dt_dcol.begin(), rb.dt_dcol.end());
     map.dt_drow.insert(map.dt_drow.end(), rb.dt_drow.begin(), rb.dt_drow.end());
-    map.background_weight.insert(map.background_weight.end(), rb.background.begin(), rb.background.end());
-    map.opaque_weight.insert(map.opaque_weight.end(), rb.opaque.begin(), rb.opaque.end());
     rb.stats.add_to(&map.stats);
     rb = RowBuffer{};  // free as we go: peak memory ~ one copy
 #ifdef __GLIBC__

@@ -69,9 +69,10 @@ struct TransportMap {
 };
 
 // Builds the map of a camera. threads <= 0: std::thread::hardware_concurrency().
-// Rows are handed to threads dynamically, each row into its own buffer; the
-// buffers are concatenated in row order, so the output is bit-identical for any
-// thread count. Throws std::invalid_argument for samples_per_axis < 1 and
+// Rows are handed to threads dynamically; each writes its pixels' entries in
+// place and its crossings into its own buffer, and the buffers are
+// concatenated in row order, so the output is bit-identical for any thread
+// count. The arrays are advised onto huge pages (util/huge_pages.h). Throws std::invalid_argument for samples_per_axis < 1 and
 // std::overflow_error beyond 2^32 - 1 crossings; std::invalid_argument for a
 // reflection_grid < 1 or a negative or non-finite reflection_grid_tolerance.
 // progress (optional) is called from the calling thread with (rows done, rows)
