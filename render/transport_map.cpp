@@ -1,9 +1,5 @@
 #include "render/transport_map.h"
 
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
-
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -11,6 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "render/crossing_sink.h"
 #include "render/parallel_rows.h"
 #include "render/reflection_grid.h"
 #include "render/row_camera_rays.h"
@@ -70,17 +67,12 @@ struct PixelArrays {
   int width = 0;
 };
 
+// A row's per-pixel entries and statistics (its crossings go to the CrossingSink).
 struct RowBuffer {
   std::uint32_t* counts = nullptr;  // the row's slices of PixelArrays
   float *background = nullptr, *opaque = nullptr;
-  std::vector<float> s, t, w, ds_dcol, ds_drow, dt_dcol, dt_drow;  // the row's crossings
-  std::vector<std::uint8_t> tag;
   RowStats stats;
 
-  void clear() {
-    for (auto* v : {&s, &t, &w, &ds_dcol, &ds_drow, &dt_dcol, &dt_drow}) v->clear();
-    tag.clear();
-  }
   // Row `row`'s per-pixel entries go to its slices of `pixels`.
   void start_row(const PixelArrays& pixels, int row) {
     const std::size_t first = static_cast<std::size_t>(row) * static_cast<std::size_t>(pixels.width);
@@ -88,46 +80,23 @@ struct RowBuffer {
     background = pixels.background + first;
     opaque = pixels.opaque + first;
   }
-  void push(const GridCrossing& c) {
-    s.push_back(c.s_mm);
-    t.push_back(c.t_mm);
-    w.push_back(c.weight);
-    tag.push_back(c.tag);
-    ds_dcol.push_back(c.ds_dcol);
-    ds_drow.push_back(c.ds_drow);
-    dt_dcol.push_back(c.dt_dcol);
-    dt_drow.push_back(c.dt_drow);
-  }
-  // The crossings of `from`, in arrays of exactly their size (the row waits
-  // for the concatenation: no growth slack).
-  void take_crossings(const RowBuffer& from) {
-    s.assign(from.s.begin(), from.s.end());
-    t.assign(from.t.begin(), from.t.end());
-    w.assign(from.w.begin(), from.w.end());
-    ds_dcol.assign(from.ds_dcol.begin(), from.ds_dcol.end());
-    ds_drow.assign(from.ds_drow.begin(), from.ds_drow.end());
-    dt_dcol.assign(from.dt_dcol.begin(), from.dt_dcol.end());
-    dt_drow.assign(from.dt_drow.begin(), from.dt_drow.end());
-    tag.assign(from.tag.begin(), from.tag.end());
-  }
 };
 
-// One pixel's sums over its samples, appending their crossings to a row's
-// scratch buffer.
+// One pixel's sums over its samples, appending their crossings to the row's.
 struct PixelSums {
   bool any_hit = false;
   double background = 0, opaque = 0;
   std::uint32_t count = 0;
 
   // A traced sample, weights times scale.
-  void add_traced(const TraceResult& r, double scale, RowBuffer* scratch) {
+  void add_traced(const TraceResult& r, double scale, RowCrossings* scratch) {
     any_hit = any_hit || r.met_solid();
     for (const SheetCrossing& c : r.crossings) scratch->push(grid_crossing(c, scale));
     count += static_cast<std::uint32_t>(r.crossings.size());
     background += r.background_weight * scale;
     opaque += r.opaque_weight * scale;
   }
-  void add_crossings(const GridCrossing* c, std::size_t n, RowBuffer* scratch) {
+  void add_crossings(const GridCrossing* c, std::size_t n, RowCrossings* scratch) {
     for (std::size_t i = 0; i < n; ++i) scratch->push(c[i]);
     count += static_cast<std::uint32_t>(n);
   }
@@ -165,11 +134,11 @@ struct SampleLattice {
 
 void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
                const RigidTransform& camera_from_world, const TraceOptions& options, int k, int row,
-               const PixelArrays& pixels, RowBuffer* out) {
+               const PixelArrays& pixels, RowBuffer* out, CrossingSink* sink) {
   thread_local TraceResult r;  // reused: no allocation per ray
   // The row's crossings grow here, in one buffer per thread that keeps its
-  // capacity from row to row, and are copied to the row once, at their size.
-  thread_local RowBuffer scratch;
+  // capacity from row to row, and go to the sink when the row is done.
+  thread_local RowCrossings scratch;
   scratch.clear();
   const int width = camera.width_px();
   const double inv_samples = 1.0 / (static_cast<double>(k) * k);
@@ -189,7 +158,7 @@ void trace_row(const TraceScene& scene, const SceneIndex& index, const CameraMod
     }
     pixel.store(col, out);
   }
-  out->take_crossings(scratch);
+  sink->commit(row, &scratch);
 }
 
 // The reflection grid's anchors: anchor row ay, traced whole.
@@ -232,9 +201,10 @@ struct CellRow {
 void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
                        const RigidTransform& camera_from_world, const TraceOptions& options,
                        const SampleLattice& lattice, const std::vector<AnchorRow>& anchors,
-                       const std::vector<CellRow>& cells, int row, const PixelArrays& pixel_arrays, RowBuffer* out) {
+                       const std::vector<CellRow>& cells, int row, const PixelArrays& pixel_arrays, RowBuffer* out,
+                       CrossingSink* sink) {
   thread_local TraceResult r;
-  thread_local RowBuffer scratch;
+  thread_local RowCrossings scratch;
   thread_local std::vector<Eigen::Vector2d> pixels;
   thread_local std::vector<std::optional<CameraRay>> rays;
   thread_local std::vector<GridCrossing> interpolated;
@@ -322,7 +292,7 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
     }
     pixel.store(col, out);
   }
-  out->take_crossings(scratch);
+  sink->commit(row, &scratch);
 }
 
 // The anchor rows pixel row `row` reads: [first, last].
@@ -335,7 +305,7 @@ std::pair<int, int> anchor_rows_of(const SampleLattice& lattice, int row) {
 // The rows of a map: traced sample by sample, or with the reflection grid.
 std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
                                   const RigidTransform& camera_from_world, const TraceOptions& options, int k,
-                                  const PixelArrays& pixels, int* threads, std::vector<RowStats>* anchor_stats,
+                                  const PixelArrays& pixels, CrossingSink* sink, int* threads, std::vector<RowStats>* anchor_stats,
                                   const std::function<void(int, int)>& progress) {
   const int height = camera.height_px();
   std::vector<RowBuffer> rows(static_cast<std::size_t>(height));
@@ -345,7 +315,7 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
         height, *threads,
         [&](int row) {
           trace_row(scene, index, camera, camera_from_world, options, k, row, pixels,
-                    &rows[static_cast<std::size_t>(row)]);
+                    &rows[static_cast<std::size_t>(row)], sink);
         },
         progress);
     return rows;
@@ -416,7 +386,7 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
                                       [&](int i) {
                                         trace_row_on_grid(scene, index, camera, camera_from_world, options, lattice,
                                                           anchors, cells, first_row + i, pixels,
-                                                          &rows[static_cast<std::size_t>(first_row + i)]);
+                                                          &rows[static_cast<std::size_t>(first_row + i)], sink);
                                       },
                                       report()));
     reported += end_row - first_row;
@@ -462,38 +432,19 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
   pixels.opaque = map.opaque_weight.data();
   pixels.width = width;
   std::vector<RowStats> anchor_stats;  // the reflection grid's anchor rows
-  std::vector<RowBuffer> rows = trace_rows(scene, *index, camera, camera_from_world, options, samples_per_axis,
-                                           pixels, &threads, &anchor_stats, progress);
+  CrossingSink sink(height);
+  const std::vector<RowBuffer> rows = trace_rows(scene, *index, camera, camera_from_world, options, samples_per_axis,
+                                                 pixels, &sink, &threads, &anchor_stats, progress);
 
   map.stats.threads = threads;
-  std::size_t total = 0;
-  for (const RowBuffer& rb : rows) total += rb.w.size();
+  const std::size_t total = sink.size();
   if (total > std::numeric_limits<std::uint32_t>::max())
     throw std::overflow_error("build_transport_map: more than 2^32 - 1 crossings");
   // Counts to offsets (no overflow: the sum is total).
   std::uint32_t offset = 0;
   for (std::size_t p = 1; p <= pixel_count; ++p) map.pixel_offsets[p] = offset += map.pixel_offsets[p];
-  for (auto* v : {&map.s_mm, &map.t_mm, &map.weight, &map.ds_dcol, &map.ds_drow, &map.dt_dcol, &map.dt_drow})
-    reserve_huge(v, total);
-  reserve_huge(&map.tag, total);
-  [[maybe_unused]] int rows_freed = 0;
-  for (RowBuffer& rb : rows) {
-    map.s_mm.insert(map.s_mm.end(), rb.s.begin(), rb.s.end());
-    map.t_mm.insert(map.t_mm.end(), rb.t.begin(), rb.t.end());
-    map.weight.insert(map.weight.end(), rb.w.begin(), rb.w.end());
-    map.tag.insert(map.tag.end(), rb.tag.begin(), rb.tag.end());
-    map.ds_dcol.insert(map.ds_dcol.end(), rb.ds_dcol.begin(), rb.ds_dcol.end());
-    map.ds_drow.insert(map.ds_drow.end(), rb.ds_drow.begin(), rb.ds_drow.end());
-    map.dt_dcol.insert(map.dt_dcol.end(), rb.dt_dcol.begin(), rb.dt_dcol.end());
-    map.dt_drow.insert(map.dt_drow.end(), rb.dt_drow.begin(), rb.dt_drow.end());
-    rb.stats.add_to(&map.stats);
-    rb = RowBuffer{};  // free as we go: peak memory ~ one copy
-#ifdef __GLIBC__
-    // The rows' small blocks go back to malloc's free lists, which the map's
-    // large arrays (mmapped) never reuse: hand the freed pages back to the system.
-    if (++rows_freed % 64 == 0) malloc_trim(0);
-#endif
-  }
+  sink.move_into(&map);
+  for (const RowBuffer& rb : rows) rb.stats.add_to(&map.stats);
   for (const RowStats& st : anchor_stats) st.add_to(&map.stats);
   map.stats.crossings = static_cast<long>(total);
   return map;

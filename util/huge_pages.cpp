@@ -1,6 +1,7 @@
 #include "util/huge_pages.h"
 
 #include <cstdint>
+#include <new>
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -9,9 +10,12 @@
 
 namespace glasspiv {
 
+namespace {
+constexpr std::size_t kHugePage = std::size_t{2} << 20;
+}  // namespace
+
 void advise_huge_pages(void* data, std::size_t bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-  constexpr std::size_t kHugePage = std::size_t{2} << 20;
   if (data == nullptr || bytes < 2 * kHugePage) return;  // too small to hold an aligned huge page
   const long page_size = sysconf(_SC_PAGESIZE);
   if (page_size <= 0) return;
@@ -24,6 +28,28 @@ void advise_huge_pages(void* data, std::size_t bytes) {
 #else
   (void)data;
   (void)bytes;
+#endif
+}
+
+void* allocate_huge(std::size_t bytes) {
+  if (bytes == 0) return nullptr;
+#if defined(__linux__)
+  void* p = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (p == MAP_FAILED) throw std::bad_alloc();
+  advise_huge_pages(p, bytes);
+  return p;
+#else
+  return ::operator new(bytes);
+#endif
+}
+
+void free_huge(void* data, std::size_t bytes) {
+  if (data == nullptr) return;
+#if defined(__linux__)
+  munmap(data, bytes);
+#else
+  (void)bytes;
+  ::operator delete(data);
 #endif
 }
 
