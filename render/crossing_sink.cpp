@@ -27,8 +27,8 @@ void RowCrossings::clear() {
 namespace {
 // Chunk sizes in crossings: small first (a preview's map needs little), then
 // doubling up to a cap that bounds what the final copy holds beside the map
-// (29 MiB at 2^20).
-constexpr std::size_t kFirstChunk = std::size_t{1} << 16, kMaxChunk = std::size_t{1} << 20;
+// (7.25 MiB at 2^18).
+constexpr std::size_t kFirstChunk = std::size_t{1} << 16, kMaxChunk = std::size_t{1} << 18;
 constexpr int kFloatArrays = 7;  // s, t, w, ds_dcol, ds_drow, dt_dcol, dt_drow
 }  // namespace
 
