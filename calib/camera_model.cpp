@@ -284,6 +284,33 @@ UnprojectResult CameraModel::converged_result(const Eigen::Vector2d& n, const Ei
 
 void CameraModel::unproject_batch(const Eigen::Vector2d* pixels, int count, UnprojectResult* out,
                                   double tolerance_px) const {
+  unproject_lanes(pixels, nullptr, count, out, tolerance_px);
+}
+
+void CameraModel::unproject_batch_near(const Eigen::Vector2d* pixels, int count, const Eigen::Vector2d* near_pixels,
+                                       const UnprojectResult* near, UnprojectResult* out,
+                                       double tolerance_px) const {
+  Eigen::Vector2d start[kUnprojectBatch];
+  for (int first = 0; first < count; first += kUnprojectBatch) {
+    const int lanes = std::min(kUnprojectBatch, count - first);
+    for (int l = 0; l < lanes; ++l) {
+      const int i = first + l;
+      const Eigen::Vector2d offset = pixels[i] - near_pixels[i];
+      const double det = near[i].dpixel_dnormalized.determinant();
+      // One Newton step from the neighbour's solution, whose Jacobian is known:
+      // n = n_near + J^-1 (pixel - pixel_near).
+      if (near[i].ok() && offset.allFinite() && offset.cwiseAbs().maxCoeff() <= kWarmStartMaxPx &&
+          std::abs(det) > 0 && std::isfinite(det))
+        start[l] = near[i].normalized + near[i].dpixel_dnormalized.inverse() * offset;
+      else
+        start[l] = undistorted_guess(pixels[i]);
+    }
+    unproject_lanes(pixels + first, start, lanes, out + first, tolerance_px);
+  }
+}
+
+void CameraModel::unproject_lanes(const Eigen::Vector2d* pixels, const Eigen::Vector2d* start, int count,
+                                  UnprojectResult* out, double tolerance_px) const {
   for (int first = 0; first < count; first += kUnprojectBatch) {
     const int lanes = std::min(kUnprojectBatch, count - first);
     const Eigen::Vector2d* pixel = pixels + first;
@@ -301,7 +328,7 @@ void CameraModel::unproject_batch(const Eigen::Vector2d* pixels, int count, Unpr
       fallback[l] = pinhole || !pixel[l].allFinite();
       active[l] = false;
       if (fallback[l]) continue;
-      n[l] = undistorted_guess(pixel[l]);
+      n[l] = start ? start[first + l] : undistorted_guess(pixel[l]);
       error[l] = project_normalized_inline(n[l], &j[l]) - pixel[l];
       error_norm[l] = error[l].norm();
       iterations[l] = 0;

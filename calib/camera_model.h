@@ -98,6 +98,16 @@ class CameraModel {
   void unproject_batch(const Eigen::Vector2d* pixels, int count, UnprojectResult* out,
                        double tolerance_px = 1e-10) const;
   static constexpr int kUnprojectBatch = 4;
+  // unproject_batch with each pixel's Newton iteration started from a nearby
+  // pixel already unprojected, near_pixels[i] with result near[i] (its
+  // solution moved to pixels[i] by its Jacobian), instead of the undistorted
+  // guess: along a row of pixels a step or two fewer. A pixel whose near[i] is
+  // not ok, or lies more than kWarmStartMaxPx away, starts from the guess.
+  // Converged to the same tolerance as unproject, so the two agree to about
+  // tolerance_px, but not to the bit.
+  void unproject_batch_near(const Eigen::Vector2d* pixels, int count, const Eigen::Vector2d* near_pixels,
+                            const UnprojectResult* near, UnprojectResult* out, double tolerance_px = 1e-10) const;
+  static constexpr double kWarmStartMaxPx = 16;
 
   // Normalised radius below which the distortion is invertible in every
   // direction (the Jacobian stays positive); kFoldSearchRadius when no fold was
@@ -125,6 +135,10 @@ class CameraModel {
   // Newton's start: the pixel's normalised coordinates without distortion,
   // close for realistic lenses.
   Eigen::Vector2d undistorted_guess(const Eigen::Vector2d& pixel) const;
+  // unproject_batch and unproject_batch_near: Newton from start[i] (nullptr:
+  // the undistorted guess).
+  void unproject_lanes(const Eigen::Vector2d* pixels, const Eigen::Vector2d* start, int count, UnprojectResult* out,
+                       double tolerance_px) const;
   // The result for a converged Newton iterate n with Jacobian j: Ok, or
   // BeyondFold outside the invertible region.
   UnprojectResult converged_result(const Eigen::Vector2d& n, const Eigen::Matrix2d& j, int iterations) const;

@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "render/trace_scene_builder.h"
-
 namespace glasspiv {
 
 RowCameraRays::RowCameraRays(const CameraModel& camera, const RigidTransform& camera_from_world, int row,
@@ -23,7 +21,7 @@ const std::optional<CameraRay>& RowCameraRays::next() {
         for (int sx = 0; sx < k_; ++sx)
           pixels_.emplace_back(col + (sx + 0.5) / k_ - 0.5, row_ + (sy + 0.5) / k_ - 0.5);
     next_column_ = end;
-    pixel_camera_rays(camera_, camera_from_world_, pixels_, &rays_);
+    pixel_camera_rays(camera_, camera_from_world_, pixels_, &rays_, &warm_);
     next_ray_ = 0;
   }
   return rays_[next_ray_++];

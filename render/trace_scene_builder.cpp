@@ -152,6 +152,31 @@ void pixel_camera_rays(const CameraModel& model, const RigidTransform& camera_fr
   }
 }
 
+void pixel_camera_rays(const CameraModel& model, const RigidTransform& camera_from_world,
+                       const std::vector<Eigen::Vector2d>& pixels, std::vector<std::optional<CameraRay>>* rays,
+                       CameraRayWarmStart* warm) {
+  constexpr int kBatch = CameraModel::kUnprojectBatch;
+  rays->resize(pixels.size());
+  UnprojectResult u[kBatch];
+  Eigen::Vector2d near_pixels[kBatch];
+  UnprojectResult near[kBatch];
+  for (std::size_t first = 0; first < pixels.size(); first += kBatch) {
+    const int count = static_cast<int>(std::min<std::size_t>(kBatch, pixels.size() - first));
+    // Lane l starts from the previous batch's lane l (a lane it lacks: cold).
+    for (int l = 0; l < count; ++l) {
+      near_pixels[l] = l < warm->count ? warm->pixels[l] : pixels[first + static_cast<std::size_t>(l)];
+      near[l] = l < warm->count ? warm->results[l] : UnprojectResult{};
+    }
+    model.unproject_batch_near(pixels.data() + first, count, near_pixels, near, u);
+    for (int l = 0; l < count; ++l) {
+      (*rays)[first + static_cast<std::size_t>(l)] = camera_ray_of(u[l], camera_from_world);
+      warm->pixels[l] = pixels[first + static_cast<std::size_t>(l)];
+      warm->results[l] = u[l];
+    }
+    warm->count = std::max(warm->count, count);
+  }
+}
+
 std::optional<WorldRay> pixel_world_ray(const Scene& scene, int camera_index, const Eigen::Vector2d& pixel) {
   const SceneCamera& cam = scene.cameras.at(static_cast<std::size_t>(camera_index));
   if (!cam.camera.camera_from_world) throw std::invalid_argument("pixel_world_ray: camera '" + cam.name + "' has no pose");

@@ -170,7 +170,8 @@ void trace_anchor_row(const TraceScene& scene, const SceneIndex& index, const Ca
   thread_local std::vector<std::optional<CameraRay>> rays;
   pixels.clear();
   for (int ax = 0; ax < lattice.anchors_x; ++ax) pixels.push_back(lattice.pixel(ax * lattice.g, ay * lattice.g));
-  pixel_camera_rays(camera, camera_from_world, pixels, &rays);
+  CameraRayWarmStart warm;
+  pixel_camera_rays(camera, camera_from_world, pixels, &rays, &warm);
   const double inv_samples = 1.0 / (static_cast<double>(lattice.k) * lattice.k);
   for (const std::optional<CameraRay>& ray : rays) {
     if (!ray) {
@@ -223,7 +224,8 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
         const int x = col * k + sx, y = row * k + sy;
         if (!lattice.is_anchor(x, y) && !interpolated_whole(x, y)) pixels.push_back(lattice.pixel(x, y));
       }
-  pixel_camera_rays(camera, camera_from_world, pixels, &rays);
+  CameraRayWarmStart warm;
+  pixel_camera_rays(camera, camera_from_world, pixels, &rays, &warm);
   std::size_t next_ray = 0;
   out->start_row(pixel_arrays, row);
   for (int col = 0; col < width; ++col) {

@@ -20,7 +20,7 @@ namespace glasspiv {
 // whenever build_transport_map (or trace_ray, the shapes, the optics under it)
 // changes what it produces for the same inputs, so that maps cached by an
 // older build are traced again instead of reused.
-inline constexpr std::uint32_t kTransportMapTracerVersion = 1;
+inline constexpr std::uint32_t kTransportMapTracerVersion = 2;
 
 // Version of the file layout (header.version); bump it when the layout changes.
 inline constexpr std::uint32_t kTransportMapFormatVersion = 1;

@@ -423,6 +423,63 @@ TEST(CameraModel, UnprojectBatchEqualsUnprojectToTheBit) {
   std::printf("unproject_batch = unproject on %ld pixels (%ld not ok)\n", compared, halved_or_failed);
 }
 
+// 4a''. unproject_batch_near: started from the pixel before along a row (a
+// step of 1 to 7 px, as the tracer's rows and reflection-grid rows take them)
+// it converges as unproject does, to the same status and a reprojection within
+// the same tolerance, in fewer Newton steps in all; a start farther than
+// kWarmStartMaxPx, or from a result that is not ok, is unproject's to the bit.
+TEST(CameraModel, UnprojectBatchNearConvergesAsUnprojectInFewerSteps) {
+  std::mt19937 rng(43);
+  std::vector<CameraModel> models;
+  for (const NamedLens& lens : round_trip_lenses()) models.push_back(lens.model);
+  for (int count : {4, 5, 8, 12, 14})
+    for (int trial = 0; trial < 2; ++trial) models.push_back(random_camera(count, rng));
+  models.emplace_back(1920, 1080, 1000, 1000, 959.5, 539.5, std::vector<double>{-0.5, 0, 0, 0, 0});  // folds
+  long compared = 0, warm_steps = 0, cold_steps = 0, not_ok = 0;
+  for (const CameraModel& m : models) {
+    for (int row = 0; row < 5; ++row) {
+      const double y = -0.5 + (m.height_px() - 1.0) * row / 4.0;
+      for (double step_px : {1.0, 2.0, 7.0}) {
+        std::vector<Eigen::Vector2d> pixels;
+        for (double x = 0; x < m.width_px(); x += step_px) pixels.emplace_back(x, y);
+        const int count = static_cast<int>(pixels.size());
+        // Each pixel starts from the one before it (the first from a far one).
+        std::vector<Eigen::Vector2d> near_pixels(pixels.size());
+        std::vector<UnprojectResult> near(pixels.size()), out(pixels.size());
+        near_pixels[0] = pixels[0] + Eigen::Vector2d(100, 0);
+        near[0] = m.unproject(near_pixels[0]);
+        for (int i = 1; i < count; ++i) {
+          near_pixels[i] = pixels[i - 1];
+          near[i] = m.unproject(pixels[i - 1]);
+        }
+        m.unproject_batch_near(pixels.data(), count, near_pixels.data(), near.data(), out.data());
+        for (int i = 0; i < count; ++i) {
+          const UnprojectResult cold = m.unproject(pixels[i]);
+          ASSERT_EQ(out[i].status, cold.status) << pixels[i].transpose();
+          ++compared;
+          if (!cold.ok()) {
+            ++not_ok;
+            continue;
+          }
+          warm_steps += out[i].iterations;
+          cold_steps += cold.iterations;
+          // Both stop within 1e-10 px; the reprojection of the stored
+          // normalised point adds its own rounding (~1e-13 px here).
+          EXPECT_LT((m.project_normalized(out[i].normalized) - pixels[i]).norm(), 1.1e-10) << pixels[i].transpose();
+          if (i == 0 || !near[i].ok()) {  // started cold: unproject's to the bit
+            EXPECT_EQ(std::memcmp(out[i].normalized.data(), cold.normalized.data(), 2 * sizeof(double)), 0);
+            EXPECT_EQ(out[i].iterations, cold.iterations);
+          }
+        }
+      }
+    }
+  }
+  std::printf("unproject_batch_near: %ld pixels (%ld not ok), %ld Newton steps against unproject's %ld\n", compared,
+              not_ok, warm_steps, cold_steps);
+  EXPECT_GT(not_ok, 0);                    // the folding lens's outer pixels were compared too
+  EXPECT_LT(warm_steps, cold_steps * 0.7);  // at least 30 % fewer steps
+}
+
 // 4b. cv::undistortPoints with its default criteria (5 fixed-point iterations)
 // does not converge at the corners of a strong barrel lens; ours does.
 TEST(CameraModel, UnprojectBeatsOpenCVDefaultAtStrongBarrelCorners) {
