@@ -36,6 +36,7 @@ struct RenderOptions {
   int reflection_grid = render_trace_options().reflection_grid;
   double reflection_grid_tolerance = render_trace_options().reflection_grid_tolerance;
   bool whole_samples = render_trace_options().grid_whole_samples;
+  int reflection_grid_levels = render_trace_options().reflection_grid_levels;
   int max_depth = TraceOptions{}.max_depth, samples = 0, threads = 0, binning = 1;
   std::uint64_t seed = 1;
 };
@@ -140,6 +141,7 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
   options.reflection_grid = o.reflection_grid;
   options.reflection_grid_tolerance = o.reflection_grid_tolerance;
   options.grid_whole_samples = o.whole_samples;
+  options.reflection_grid_levels = o.reflection_grid_levels;
   options.max_depth = o.max_depth;
   options.reflections = !o.no_reflections;
   const Camera& camera = ps.camera();
@@ -272,6 +274,11 @@ void register_render_command(CLI::App& app) {
               "With the reflection grid, interpolate a sample whole (its refracted chain too, no ray traced) where "
               "its four anchors agree on everything; --no-whole-samples traces every sample's refracted chain "
               "(default: on)");
+  r->add_option("--reflection-grid-levels", o->reflection_grid_levels,
+                "2: trace the grid's anchors themselves on a grid twice as coarse and interpolate an anchor whole "
+                "where its coarse cell agrees on everything (1: trace every anchor; bench/RESULTS.md tables the error)")
+      ->check(CLI::Range(1, 2))
+      ->capture_default_str();
   r->add_option("--max-depth", o->max_depth, "Most interface events on one path")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();

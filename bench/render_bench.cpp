@@ -98,12 +98,12 @@ void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransfo
               "the checkerboard itself:\n",
               cam.width_px(), cam.height_px(), reference ? " and against the reference above" : "", correction.grid.cols,
               correction.grid.rows, correction.grid.mm_per_px, count_cells(correction.states).valid);
-  std::printf("| samples/axis | grid | tolerance | whole samples | s per MP | branches/sample | subtrees interpolated/sample | "
+  std::printf("| samples/axis | grid | levels | tolerance | whole samples | s per MP | branches/sample | subtrees interpolated/sample | "
               "samples interpolated whole | "
               "RMS vs traced whole | largest vs traced whole | light on the sheet vs traced whole |%s "
               "corrected: RMS vs traced whole | corrected: RMS vs checkerboard |\n",
               reference ? " RMS error |" : "");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|%s---|---|\n", reference ? "---|" : "");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|%s---|---|\n", reference ? "---|" : "");
   const double mp = cam.width_px() * double(cam.height_px()) / 1e6;
   for (int k : reference ? std::vector<int>{1, 2} : std::vector<int>{1}) {
     TransportMap whole;
@@ -114,14 +114,18 @@ void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransfo
       double tolerance;
       bool whole = false;
       bool reflections = true;  // false: against the refraction-only map traced whole (the row before)
+      int levels = 1;           // TraceOptions::reflection_grid_levels
     };
     for (const GridRow& g : {GridRow{1, 0}, GridRow{2, 0.05}, GridRow{2, 0.1}, GridRow{2, 0.25}, GridRow{4, 0.1},
                              GridRow{2, 0.05, true}, GridRow{2, 0.1, true}, GridRow{4, 0.1, true},
-                             GridRow{1, 0, false, false}, GridRow{2, 0.1, true, false}}) {
+                             GridRow{2, 0.05, true, true, 2}, GridRow{2, 0.1, true, true, 2},
+                             GridRow{1, 0, false, false}, GridRow{2, 0.1, true, false},
+                             GridRow{2, 0.1, true, false, 2}}) {
       TraceOptions options;
       options.reflections = g.reflections;
       options.reflection_grid = g.grid;
       options.grid_whole_samples = g.whole;
+      options.reflection_grid_levels = g.levels;
       if (g.grid > 1) options.reflection_grid_tolerance = g.tolerance;
       const Stopwatch clock;
       TransportMap map = build_transport_map(ts, cam, pose, options, k, threads);
@@ -143,8 +147,8 @@ void grid_table(const TraceScene& ts, const CameraModel& cam, const RigidTransfo
       char tolerance[16] = "";
       if (g.grid > 1) std::snprintf(tolerance, sizeof tolerance, "%g", g.tolerance);
       const double samples = double(m.stats.camera_rays + m.stats.samples_interpolated);
-      std::printf("| %d%s | %d | %s | %s | %.3f | %.2f | %.2f | %.1f %% | %.2e | %.4f | %.5f |", k, g.reflections ? "" : ", refraction only", g.grid,
-                  tolerance, g.whole ? "yes" : "", seconds / mp, double(m.stats.branches_traced) / samples,
+      std::printf("| %d%s | %d | %d | %s | %s | %.3f | %.2f | %.2f | %.1f %% | %.2e | %.4f | %.5f |", k,
+                  g.reflections ? "" : ", refraction only", g.grid, g.levels, tolerance, g.whole ? "yes" : "", seconds / mp, double(m.stats.branches_traced) / samples,
                   double(m.stats.subtrees_interpolated) / samples, 100.0 * m.stats.samples_interpolated / samples,
                   rms_difference(image, whole_image),
                   largest, light / whole_light);

@@ -82,6 +82,13 @@ struct TraceOptions {
   // of the refracted light as well (bench/RESULTS.md tables its error); works
   // with reflections off too. false: each sample's refracted chain is traced.
   bool grid_whole_samples = false;
+  // With a grid g > 1: 2 traces the anchors themselves on a coarser grid of
+  // 2g only and interpolates each other anchor whole where its 2g cell agrees
+  // whole (as grid_whole_samples does for a sample; with or without it), so
+  // smooth regions cost one traced sample in (2g)^2; elsewhere the anchor is
+  // traced. An approximation (bench/RESULTS.md tables its error). 1: every
+  // anchor traced.
+  int reflection_grid_levels = 1;
 };
 
 // Whether build_transport_map uses the reflection grid: g > 1 and something

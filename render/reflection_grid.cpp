@@ -77,6 +77,54 @@ void AnchorRow::add(const TraceResult* r, double scale) {
   met_solid_.push_back(r && r->met_solid());
 }
 
+void AnchorRow::add_copy(const AnchorRow& from, int i) {
+  crossings_.insert(crossings_.end(), from.crossings(i), from.crossings(i) + from.crossing_count(i));
+  subtrees_.insert(subtrees_.end(), from.subtrees(i), from.subtrees(i) + from.subtree_count(i));
+  chain_.push_back(from.chain_[at(i)]);
+  chain_ok_.push_back(from.chain_ok_[at(i)]);
+  begin_.push_back(static_cast<std::uint32_t>(crossings_.size()));
+  subtree_begin_.push_back(static_cast<std::uint32_t>(subtrees_.size()));
+  background_.push_back(from.background_[at(i)]);
+  opaque_.push_back(from.opaque_[at(i)]);
+  met_solid_.push_back(from.met_solid_[at(i)]);
+}
+
+void AnchorRow::add_interpolated(const SubtreeCorners& chain, const SubtreeCorners* subtrees, std::size_t count,
+                                 double cell_px, double fx, double fy, bool met_solid) {
+  const std::size_t first_crossing = crossings_.size();
+  const auto here = [&] { return static_cast<std::uint32_t>(crossings_.size() - first_crossing); };
+  double background = 0, opaque = 0, cut = 0;
+  interpolate_subtree(chain, cell_px, fx, fy, &crossings_, &background, &opaque, &cut);
+  SubtreeRecord chain_record;
+  chain_record.weight = 1;
+  chain_record.background = static_cast<float>(background);
+  chain_record.opaque = static_cast<float>(opaque);
+  chain_record.cut = static_cast<float>(cut);
+  chain_record.count = here();
+  const double beta[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+  for (std::size_t j = 0; j < count; ++j) {
+    const SubtreeCorners& corners = subtrees[j];
+    SubtreeRecord& rec = subtrees_.emplace_back();
+    rec.id = corners.record[0]->id;
+    double weight = 0, b = 0, o = 0, c = 0;
+    for (int i = 0; i < 4; ++i) weight += beta[i] * corners.record[i]->weight;
+    rec.weight = static_cast<float>(weight);
+    rec.first = here();
+    interpolate_subtree(corners, cell_px, fx, fy, &crossings_, &b, &o, &c);
+    rec.count = here() - rec.first;
+    rec.background = static_cast<float>(b);
+    rec.opaque = static_cast<float>(o);
+    rec.cut = static_cast<float>(c);
+  }
+  chain_.push_back(chain_record);
+  chain_ok_.push_back(1);
+  begin_.push_back(static_cast<std::uint32_t>(crossings_.size()));
+  subtree_begin_.push_back(static_cast<std::uint32_t>(subtrees_.size()));
+  background_.push_back(background);
+  opaque_.push_back(opaque);
+  met_solid_.push_back(met_solid);
+}
+
 const SubtreeRecord* AnchorRow::find_subtree(int i, std::uint64_t id) const {
   const SubtreeRecord* begin = subtrees(i);
   const SubtreeRecord* end = begin + subtree_count(i);

@@ -50,6 +50,8 @@ struct SubtreeRecord {
   std::uint32_t first = 0, count = 0;  // its crossings among the anchor's
 };
 
+struct SubtreeCorners;
+
 // The anchors of one anchor row, in column order: each one's whole trace (what
 // the map stores for it) and its subtrees.
 class AnchorRow {
@@ -57,6 +59,16 @@ class AnchorRow {
   // Appends the next anchor: r's result with weights times scale, or nullptr
   // for a ray that could not be unprojected.
   void add(const TraceResult* r, double scale);
+  // Appends anchor i of `from` (another row's), as it is there.
+  void add_copy(const AnchorRow& from, int i);
+  // Appends an anchor interpolated whole at (fx, fy) of a coarser cell that
+  // agrees whole (cell_agrees_whole): its refracted chain from `chain`'s
+  // corners (the whole trace's escaped and opaque light with it), then each of
+  // the cell's `count` agreeing subtrees, each a subtree record of its own
+  // (weight at the reflection bilinear), as add() would have stored the trace.
+  // met_solid: the corners'.
+  void add_interpolated(const SubtreeCorners& chain, const SubtreeCorners* subtrees, std::size_t count,
+                        double cell_px, double fx, double fy, bool met_solid);
   int size() const { return static_cast<int>(met_solid_.size()); }
   // Anchor i's crossings, all of them, as traced.
   const GridCrossing* crossings(int i) const { return crossings_.data() + begin_[at(i)]; }

@@ -196,6 +196,108 @@ struct CellRow {
   bool agrees_whole(int cx) const { return !whole.empty() && whole[static_cast<std::size_t>(cx)] != 0; }
 };
 
+// The cells of cell row cy between anchor rows top and bottom: their agreeing
+// subtrees and, with `whole`, which agree whole.
+void compare_cell_row(const AnchorRow& top, const AnchorRow& bottom, int cells_x, double cell_px,
+                      const GridTolerance& tolerance, bool whole, CellRow* cr) {
+  cr->begin.push_back(0);
+  if (whole) {
+    cr->whole.resize(static_cast<std::size_t>(cells_x));
+    cr->chains.resize(static_cast<std::size_t>(cells_x));
+  }
+  for (int cx = 0; cx < cells_x; ++cx) {
+    agreeing_subtrees(top, bottom, cx, cell_px, tolerance, &cr->agreeing);
+    const std::uint32_t first = cr->begin.back();
+    cr->begin.push_back(static_cast<std::uint32_t>(cr->agreeing.ids.size()));
+    if (whole)
+      cr->whole[static_cast<std::size_t>(cx)] = cell_agrees_whole(top, bottom, cx, cell_px, tolerance,
+                                                                  cr->begin.back() - first,
+                                                                  &cr->chains[static_cast<std::size_t>(cx)]);
+  }
+}
+
+// The coarse level of TraceOptions::reflection_grid_levels 2: anchors every
+// 2g samples (traced whole), their cells compared.
+struct CoarseGrid {
+  SampleLattice lattice;
+  std::vector<AnchorRow> anchors;
+  std::vector<CellRow> cells;
+};
+
+// Where fine anchor index a (of the fine grid) lies on the coarse grid: its
+// coarse cell and the fraction across it (a coarse anchor: a == 2 c, f == 0).
+// false where no coarse cell holds it (beyond the last coarse anchor).
+bool coarse_cell_of(int a, int coarse_cells, int* cell, double* f) {
+  *cell = a / 2;
+  *f = (a % 2) * 0.5;
+  if (*cell >= coarse_cells && a % 2 == 0 && *cell > 0) {  // on the last coarse anchor: the cell before, far side
+    *cell -= 1;
+    *f = 1;
+  }
+  return *cell < coarse_cells;
+}
+
+// Fine anchor row ay with the coarse level: coarse anchors copied, every other
+// anchor interpolated whole where its coarse cell agrees whole, else traced.
+void fill_anchor_row_from_coarse(const TraceScene& scene, const SceneIndex& index, const CameraModel& camera,
+                                 const RigidTransform& camera_from_world, const TraceOptions& options,
+                                 const SampleLattice& lattice, const CoarseGrid& coarse, int ay, AnchorRow* out,
+                                 RowStats* stats) {
+  thread_local TraceResult r;
+  thread_local std::vector<Eigen::Vector2d> pixels;
+  thread_local std::vector<std::optional<CameraRay>> rays;
+  const double inv_samples = 1.0 / (static_cast<double>(lattice.k) * lattice.k);
+  const double coarse_cell_px = static_cast<double>(coarse.lattice.g) / lattice.k;
+  const int cells_x = coarse.lattice.cells_x(), cells_y = coarse.lattice.cells_y();
+  // What anchor ax is: a coarse anchor, interpolated (its cell and place in it), or traced.
+  struct Place {
+    int cx = 0, cy = 0;
+    double fx = 0, fy = 0;
+    bool whole = false;
+  };
+  const auto place = [&](int ax) {
+    Place p;
+    if (coarse_cell_of(ax, cells_x, &p.cx, &p.fx) && coarse_cell_of(ay, cells_y, &p.cy, &p.fy))
+      p.whole = coarse.cells[static_cast<std::size_t>(p.cy)].agrees_whole(p.cx);
+    return p;
+  };
+  const auto is_coarse = [&](int ax) { return ax % 2 == 0 && ay % 2 == 0; };
+  pixels.clear();
+  for (int ax = 0; ax < lattice.anchors_x; ++ax)
+    if (!is_coarse(ax) && !place(ax).whole) pixels.push_back(lattice.pixel(ax * lattice.g, ay * lattice.g));
+  CameraRayWarmStart warm;
+  pixel_camera_rays(camera, camera_from_world, pixels, &rays, &warm);
+  std::size_t next_ray = 0;
+  for (int ax = 0; ax < lattice.anchors_x; ++ax) {
+    if (is_coarse(ax)) {  // traced (and counted) in its coarse row
+      out->add_copy(coarse.anchors[static_cast<std::size_t>(ay / 2)], ax / 2);
+      continue;
+    }
+    const Place p = place(ax);
+    if (p.whole) {
+      const CellRow& cr = coarse.cells[static_cast<std::size_t>(p.cy)];
+      const auto cx = static_cast<std::size_t>(p.cx);
+      const std::uint32_t first = cr.begin[cx], count = cr.begin[cx + 1] - first;
+      out->add_interpolated(cr.chains[cx], cr.agreeing.corners.data() + first, count, coarse_cell_px, p.fx, p.fy,
+                            coarse.anchors[static_cast<std::size_t>(p.cy)].met_solid(p.cx));
+      const SubtreeRecord* chain = out->chain(out->size() - 1);
+      stats->cut_weight += chain->cut;
+      stats->interpolated += static_cast<long>(count);
+      ++stats->samples_interpolated;
+      continue;
+    }
+    const std::optional<CameraRay>& ray = rays[next_ray++];
+    if (!ray) {
+      ++stats->unproject_failures;
+      out->add(nullptr, inv_samples);
+      continue;
+    }
+    trace_ray(scene, index, *ray, options, &r);
+    stats->add(r, inv_samples);
+    out->add(&r, inv_samples);
+  }
+}
+
 // A pixel row with the reflection grid: anchors from their rows; every other
 // sample traced with the subtrees that agree in its cell deferred, and those
 // interpolated.
@@ -348,39 +450,58 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
   // so that the anchors never all wait beside the finished rows.
   constexpr int kBandRows = 64;
   int anchors_traced = 0, cells_compared = 0, anchors_freed = 0;
+  // TraceOptions::reflection_grid_levels 2: the coarse grid the anchors come from.
+  std::unique_ptr<CoarseGrid> coarse;
+  std::vector<RowStats> coarse_stats;
+  int coarse_traced = 0, coarse_compared = 0, coarse_freed = 0;
+  const double coarse_cell_px = 2.0 * lattice.g / k;
+  if (options.reflection_grid_levels > 1) {
+    coarse = std::make_unique<CoarseGrid>(CoarseGrid{SampleLattice(camera.width_px(), height, k, 2 * lattice.g), {}, {}});
+    coarse->anchors.resize(static_cast<std::size_t>(coarse->lattice.anchors_y));
+    coarse->cells.resize(static_cast<std::size_t>(coarse->lattice.anchors_y));
+    coarse_stats.assign(static_cast<std::size_t>(coarse->lattice.anchors_y), RowStats{});
+  }
   for (int first_row = 0; first_row < height; first_row += kBandRows) {
     const int end_row = std::min(height, first_row + kBandRows);
     const int anchors_needed = anchor_rows_of(lattice, end_row - 1).second + 1;
     const int first_anchor = anchors_traced;
+    if (coarse) {
+      // The coarse rows and cells the band's fine anchor rows read.
+      const int coarse_needed = std::min(coarse->lattice.anchors_y, (anchors_needed - 1) / 2 + 2);
+      const int first_coarse = coarse_traced;
+      parallel_rows(coarse_needed - first_coarse, requested_threads, [&](int i) {
+        const auto cy = static_cast<std::size_t>(first_coarse + i);
+        trace_anchor_row(scene, index, camera, camera_from_world, options, coarse->lattice, first_coarse + i,
+                         &coarse->anchors[cy], &coarse_stats[cy]);
+      });
+      coarse_traced = coarse_needed;
+      const int first_cell = coarse_compared, cells_end = std::min(coarse_needed - 1, coarse->lattice.cells_y());
+      parallel_rows(std::max(cells_end - first_cell, 0), requested_threads, [&](int i) {
+        const auto cy = static_cast<std::size_t>(first_cell + i);
+        compare_cell_row(coarse->anchors[cy], coarse->anchors[cy + 1], coarse->lattice.cells_x(), coarse_cell_px,
+                         tolerance, true, &coarse->cells[cy]);
+      });
+      coarse_compared = std::max(cells_end, first_cell);
+    }
     parallel_rows(
         anchors_needed - first_anchor, requested_threads,
         [&](int i) {
           const auto ay = static_cast<std::size_t>(first_anchor + i);
-          trace_anchor_row(scene, index, camera, camera_from_world, options, lattice, first_anchor + i, &anchors[ay],
-                           &(*anchor_stats)[ay]);
+          if (coarse)
+            fill_anchor_row_from_coarse(scene, index, camera, camera_from_world, options, lattice, *coarse,
+                                        first_anchor + i, &anchors[ay], &(*anchor_stats)[ay]);
+          else
+            trace_anchor_row(scene, index, camera, camera_from_world, options, lattice, first_anchor + i,
+                             &anchors[ay], &(*anchor_stats)[ay]);
         },
         report());
     reported += anchors_needed - first_anchor;
     anchors_traced = anchors_needed;
     const int first_cell = cells_compared, cells_end = std::min(anchors_needed - 1, lattice.cells_y());
     parallel_rows(std::max(cells_end - first_cell, 0), requested_threads, [&](int i) {
-      const int cy = first_cell + i;
-      CellRow& cr = cells[static_cast<std::size_t>(cy)];
-      const AnchorRow &top = anchors[static_cast<std::size_t>(cy)], &bottom = anchors[static_cast<std::size_t>(cy) + 1];
-      cr.begin.push_back(0);
-      if (options.grid_whole_samples) {
-        cr.whole.resize(static_cast<std::size_t>(lattice.cells_x()));
-        cr.chains.resize(static_cast<std::size_t>(lattice.cells_x()));
-      }
-      for (int cx = 0; cx < lattice.cells_x(); ++cx) {
-        agreeing_subtrees(top, bottom, cx, cell_px, tolerance, &cr.agreeing);
-        const std::uint32_t first = cr.begin.back();
-        cr.begin.push_back(static_cast<std::uint32_t>(cr.agreeing.ids.size()));
-        if (options.grid_whole_samples)
-          cr.whole[static_cast<std::size_t>(cx)] = cell_agrees_whole(top, bottom, cx, cell_px, tolerance,
-                                                                     cr.begin.back() - first,
-                                                                     &cr.chains[static_cast<std::size_t>(cx)]);
-      }
+      const auto cy = static_cast<std::size_t>(first_cell + i);
+      compare_cell_row(anchors[cy], anchors[cy + 1], lattice.cells_x(), cell_px, tolerance, options.grid_whole_samples,
+                       &cells[cy]);
     });
     cells_compared = std::max(cells_end, first_cell);
     *threads = std::max(*threads, parallel_rows(
@@ -397,7 +518,15 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
       anchors[static_cast<std::size_t>(anchors_freed)] = AnchorRow{};
       cells[static_cast<std::size_t>(anchors_freed)] = CellRow{};
     }
+    // Fine anchor rows from anchors_traced on read coarse cell rows from
+    // anchors_traced / 2 - 1 on (coarse_cell_of).
+    if (coarse)
+      for (; coarse_freed < std::min(anchors_traced / 2 - 1, coarse_traced); ++coarse_freed) {
+        coarse->anchors[static_cast<std::size_t>(coarse_freed)] = AnchorRow{};
+        coarse->cells[static_cast<std::size_t>(coarse_freed)] = CellRow{};
+      }
   }
+  for (const RowStats& st : coarse_stats) anchor_stats->push_back(st);
   return rows;
 }
 
@@ -413,6 +542,8 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
     throw std::invalid_argument("build_transport_map: reflection_grid must be >= 1");
   if (!(options.reflection_grid_tolerance >= 0) || !std::isfinite(options.reflection_grid_tolerance))
     throw std::invalid_argument("build_transport_map: reflection_grid_tolerance must be finite and >= 0");
+  if (options.reflection_grid_levels < 1 || options.reflection_grid_levels > 2)
+    throw std::invalid_argument("build_transport_map: reflection_grid_levels must be 1 or 2");
 
   const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
   TransportMap map;

@@ -316,6 +316,7 @@ std::uint64_t transport_map_fingerprint(const TraceScene& scene, const CameraMod
     h.i32(options.reflection_grid);
     h.f64(options.reflection_grid_tolerance);
     if (options.grid_whole_samples) h.boolean(true);
+    if (options.reflection_grid_levels > 1) h.i32(options.reflection_grid_levels);
   }
   h.i32(options.max_depth);
   h.i32(samples_per_axis);

@@ -485,11 +485,13 @@ TEST(ReflectionGridMap, AnySamplingAndGridKeepsTheLightAndAnchorsExact) {
 // Whole samples: on the slab, whose every path is smooth in the pixel, most
 // samples are interpolated whole, with or without reflections, and land where
 // the tracer puts them; the anchors stay exact and the map is the same on any
-// thread count.
+// thread count. With reflection_grid_levels 2 the anchors between the coarse
+// ones are interpolated too, over cells twice as wide.
 TEST(ReflectionGridMap, WholeSamplesLandWhereTheTracerPutsThem) {
+  for (int levels : {1, 2})
   for (bool reflections : {true, false})
     for (int k : {1, 2}) {
-      SCOPED_TRACE(testing::Message() << "reflections " << reflections << " k " << k);
+      SCOPED_TRACE(testing::Message() << "levels " << levels << " reflections " << reflections << " k " << k);
       TraceScene scene = slab_and_sphere();
       scene.solids.pop_back();  // the slab alone
       const CameraModel cam(40, 150, 120.0, 110.0, 19.3, 74.6);
@@ -499,11 +501,13 @@ TEST(ReflectionGridMap, WholeSamplesLandWhereTheTracerPutsThem) {
       const TransportMap whole = build_transport_map(scene, cam, RigidTransform{}, options, k, 2);
       options.reflection_grid = 2;
       options.grid_whole_samples = true;
+      options.reflection_grid_levels = levels;
       const TransportMap grid = build_transport_map(scene, cam, RigidTransform{}, options, k, 2);
       const long samples = 40L * 150 * k * k;
       EXPECT_EQ(grid.stats.camera_rays + grid.stats.samples_interpolated, samples);
-      // All but the anchors (a quarter) and the last row and column of samples.
-      EXPECT_GT(grid.stats.samples_interpolated, samples * 0.7);
+      // All but the anchors (a quarter; a sixteenth with the coarse level) and
+      // the last rows and columns of samples.
+      EXPECT_GT(grid.stats.samples_interpolated, samples * (levels == 1 ? 0.7 : 0.85));
       EXPECT_EQ(grid.stats.pixels_without_solid_hit, whole.stats.pixels_without_solid_hit);
       ASSERT_EQ(grid.pixel_count(), whole.pixel_count());
       double worst_position = 0, worst_weight = 0, worst_background = 0;
@@ -516,13 +520,14 @@ TEST(ReflectionGridMap, WholeSamplesLandWhereTheTracerPutsThem) {
         }
         worst_background = std::max(worst_background, std::abs(double(grid.background_weight[p]) - whole.background_weight[p]));
       }
-      // As the interpolated ghosts above: second-order terms over a 2 px cell.
-      EXPECT_LT(worst_position, 1e-2);
-      EXPECT_LT(worst_weight, 1e-3);
-      EXPECT_LT(worst_background, 1e-5);
-      std::printf("slab, whole samples, reflections %d, %d x %d samples: %ld of %ld interpolated, worst %.2e "
-                  "footprints, %.2e relative weight, %.1e background\n",
-                  reflections, k, k, grid.stats.samples_interpolated, samples, worst_position, worst_weight,
+      // As the interpolated ghosts above: second-order terms over a 2 px cell
+      // (4 px with the coarse level: four times the second-order term).
+      EXPECT_LT(worst_position, levels == 1 ? 1e-2 : 4e-2);
+      EXPECT_LT(worst_weight, levels == 1 ? 1e-3 : 4e-3);
+      EXPECT_LT(worst_background, levels == 1 ? 1e-5 : 4e-5);
+      std::printf("slab, whole samples, levels %d, reflections %d, %d x %d samples: %ld of %ld interpolated, worst "
+                  "%.2e footprints, %.2e relative weight, %.1e background\n",
+                  levels, reflections, k, k, grid.stats.samples_interpolated, samples, worst_position, worst_weight,
                   worst_background);
       const TransportMap one = build_transport_map(scene, cam, RigidTransform{}, options, k, 1);
       expect_same_map_arrays(one, grid);
@@ -531,14 +536,18 @@ TEST(ReflectionGridMap, WholeSamplesLandWhereTheTracerPutsThem) {
 
 // Slab and sphere: wherever a sphere's rim lies between anchors the samples
 // are traced, so every pixel keeps the whole trace's crossings, and the
-// anchors' are the whole trace's to the bit.
+// anchors' are the whole trace's to the bit (with the coarse level of
+// reflection_grid_levels 2, the coarse anchors').
 TEST(ReflectionGridMap, WholeSamplesNeverBridgeASpheresRim) {
+  for (int levels : {1, 2}) {
+  SCOPED_TRACE(testing::Message() << "levels " << levels);
   const TraceScene scene = slab_and_sphere();
   TraceOptions options;
   options.min_weight = 1e-4;
   const TransportMap whole = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 2);
   options.reflection_grid = 2;
   options.grid_whole_samples = true;
+  options.reflection_grid_levels = levels;
   const TransportMap grid = build_transport_map(scene, pinhole(), RigidTransform{}, options, 1, 2);
   EXPECT_GT(grid.stats.samples_interpolated, 0);
   EXPECT_LT(grid.stats.samples_interpolated, 40 * 30 * 3 / 4);  // the sphere's samples are traced
@@ -547,14 +556,15 @@ TEST(ReflectionGridMap, WholeSamplesNeverBridgeASpheresRim) {
         << "pixel " << p;
     EXPECT_NEAR(grid.background_weight[p], whole.background_weight[p], 1e-3) << "pixel " << p;
   }
-  for (int row = 0; row < whole.height; row += 2)
-    for (int col = 0; col < whole.width; col += 2) {
+  for (int row = 0; row < whole.height; row += 2 * levels)
+    for (int col = 0; col < whole.width; col += 2 * levels) {
       const std::size_t p = static_cast<std::size_t>(row) * whole.width + col;
       for (std::uint32_t i = 0; i < whole.pixel_offsets[p + 1] - whole.pixel_offsets[p]; ++i) {
         EXPECT_EQ(grid.s_mm[grid.pixel_offsets[p] + i], whole.s_mm[whole.pixel_offsets[p] + i]);
         EXPECT_EQ(grid.weight[grid.pixel_offsets[p] + i], whole.weight[whole.pixel_offsets[p] + i]);
       }
     }
+  }
 }
 
 TEST(ReflectionGridMap, WithoutReflectionsOrAGridTheMapIsTracedWhole) {
@@ -598,6 +608,11 @@ TEST(ReflectionGridMap, BadOptionsAreRefused) {
   EXPECT_THROW(build_transport_map(scene, pinhole(), RigidTransform{}, options), std::invalid_argument);
   options.reflection_grid_tolerance = std::nan("");
   EXPECT_THROW(build_transport_map(scene, pinhole(), RigidTransform{}, options), std::invalid_argument);
+  options.reflection_grid_tolerance = 0.1;
+  for (int levels : {0, 3}) {
+    options.reflection_grid_levels = levels;
+    EXPECT_THROW(build_transport_map(scene, pinhole(), RigidTransform{}, options), std::invalid_argument);
+  }
 }
 
 // The packed bed: the grid's image against the image traced whole, on a
@@ -607,34 +622,43 @@ TEST(ReflectionGridMap, ReactorImageStaysCloseToTheWholeTrace) {
   const TraceScene ts = build_trace_scene(scene);
   const Camera& camera = scene.cameras[0].camera;
   const CameraModel cam = binned(camera.model, 8);  // 320 x 270 px over the whole view
-  TraceOptions options;
-  const TransportMap whole = build_transport_map(ts, cam, *camera.camera_from_world, options, 1, 2);
-  options.reflection_grid = 2;
-  const TransportMap grid = build_transport_map(ts, cam, *camera.camera_from_world, options, 1, 2);
-  EXPECT_GT(grid.stats.subtrees_interpolated, 10000);
-  EXPECT_LT(grid.stats.branches_traced, whole.stats.branches_traced * 0.9);
+  const TransportMap whole = build_transport_map(ts, cam, *camera.camera_from_world, TraceOptions{}, 1, 2);
   const double mm = 5;
   auto checker = [mm](double s, double t) {
     return static_cast<double>((static_cast<long>(std::floor(s / mm)) + static_cast<long>(std::floor(t / mm))) & 1);
   };
-  const std::vector<float> a = forward_render_values(whole, checker), b = forward_render_values(grid, checker);
-  double sum = 0, worst = 0, light_a = 0, light_b = 0;
-  for (std::size_t p = 0; p < a.size(); ++p) {
-    sum += (a[p] - b[p]) * (a[p] - b[p]);
-    worst = std::max(worst, static_cast<double>(std::abs(a[p] - b[p])));
-  }
+  const std::vector<float> a = forward_render_values(whole, checker);
+  double light_a = 0;
   for (float w : whole.weight) light_a += w;
-  for (float w : grid.weight) light_b += w;
-  const double rms = std::sqrt(sum / a.size());
-  // Point samples of a 0/1 checkerboard: a ghost crossing moved across an
-  // edge changes its pixel by its weight (a few 1e-2), so the largest
-  // difference is one ghost's weight; the RMS stays far below the 1-sample
-  // render's own error against a converged one (0.02-0.03, bench/RESULTS.md).
-  EXPECT_LT(rms, 2e-3);
-  EXPECT_LT(worst, 0.1);
-  EXPECT_NEAR(light_b / light_a, 1, 2e-3);
-  std::printf("reactor 320x270: branches %ld -> %ld, image RMS difference %.2e, largest %.3f\n",
-              whole.stats.branches_traced, grid.stats.branches_traced, rms, worst);
+  // The grid alone, and with whole samples and the coarse level (anchors
+  // interpolated over 4 px cells too).
+  for (int levels : {1, 2}) {
+    SCOPED_TRACE(testing::Message() << "levels " << levels);
+    TraceOptions options;
+    options.reflection_grid = 2;
+    options.grid_whole_samples = levels == 2;
+    options.reflection_grid_levels = levels;
+    const TransportMap grid = build_transport_map(ts, cam, *camera.camera_from_world, options, 1, 2);
+    EXPECT_GT(grid.stats.subtrees_interpolated, 10000);
+    EXPECT_LT(grid.stats.branches_traced, whole.stats.branches_traced * 0.9);
+    const std::vector<float> b = forward_render_values(grid, checker);
+    double sum = 0, worst = 0, light_b = 0;
+    for (std::size_t p = 0; p < a.size(); ++p) {
+      sum += (a[p] - b[p]) * (a[p] - b[p]);
+      worst = std::max(worst, static_cast<double>(std::abs(a[p] - b[p])));
+    }
+    for (float w : grid.weight) light_b += w;
+    const double rms = std::sqrt(sum / a.size());
+    // Point samples of a 0/1 checkerboard: a ghost crossing moved across an
+    // edge changes its pixel by its weight (a few 1e-2), so the largest
+    // difference is one ghost's weight; the RMS stays far below the 1-sample
+    // render's own error against a converged one (0.02-0.03, bench/RESULTS.md).
+    EXPECT_LT(rms, 2e-3);
+    EXPECT_LT(worst, 0.1);
+    EXPECT_NEAR(light_b / light_a, 1, 2e-3);
+    std::printf("reactor 320x270, levels %d: branches %ld -> %ld, image RMS difference %.2e, largest %.3f\n", levels,
+                whole.stats.branches_traced, grid.stats.branches_traced, rms, worst);
+  }
 }
 
 }  // namespace

@@ -330,6 +330,11 @@ TEST(TransportMapFingerprint, ChangesWithEverySingleInput) {
          in.options.reflection_grid = 2;
          in.options.grid_whole_samples = true;
        }},
+      {"options.reflection_grid_levels with a grid",
+       [&](Inputs& in) {
+         in.options.reflection_grid = 2;
+         in.options.reflection_grid_levels = 2;
+       }},
       {"options.max_depth", [&](Inputs& in) { in.options.max_depth += 1; }},
       {"samples_per_axis", [&](Inputs& in) { in.samples += 1; }},
   };
