@@ -36,7 +36,7 @@ struct RenderOptions {
   int reflection_grid = render_trace_options().reflection_grid;
   double reflection_grid_tolerance = render_trace_options().reflection_grid_tolerance;
   bool whole_samples = render_trace_options().grid_whole_samples;
-  int reflection_grid_levels = render_trace_options().reflection_grid_levels;
+  int reflection_grid_levels = 0;  // 0: render_trace_options' for the reflections asked
   int max_depth = TraceOptions{}.max_depth, samples = 0, threads = 0, binning = 1;
   std::uint64_t seed = 1;
 };
@@ -141,7 +141,9 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
   options.reflection_grid = o.reflection_grid;
   options.reflection_grid_tolerance = o.reflection_grid_tolerance;
   options.grid_whole_samples = o.whole_samples;
-  options.reflection_grid_levels = o.reflection_grid_levels;
+  options.reflection_grid_levels = o.reflection_grid_levels > 0
+                                       ? o.reflection_grid_levels
+                                       : render_trace_options(!o.no_reflections).reflection_grid_levels;
   options.max_depth = o.max_depth;
   options.reflections = !o.no_reflections;
   const Camera& camera = ps.camera();
@@ -276,9 +278,9 @@ void register_render_command(CLI::App& app) {
               "(default: on)");
   r->add_option("--reflection-grid-levels", o->reflection_grid_levels,
                 "2: trace the grid's anchors themselves on a grid twice as coarse and interpolate an anchor whole "
-                "where its coarse cell agrees on everything (1: trace every anchor; bench/RESULTS.md tables the error)")
-      ->check(CLI::Range(1, 2))
-      ->capture_default_str();
+                "where its coarse cell agrees on everything (1: trace every anchor; default 2 with reflections, 1 with "
+                "--no-reflections; bench/RESULTS.md tables the error)")
+      ->check(CLI::Range(1, 2));
   r->add_option("--max-depth", o->max_depth, "Most interface events on one path")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();

@@ -89,10 +89,32 @@ void AnchorRow::add_copy(const AnchorRow& from, int i) {
   met_solid_.push_back(from.met_solid_[at(i)]);
 }
 
+namespace {
+
+// The subtree of `corners` interpolated at (fx, fy), appended to crossings as
+// a record whose crossings start `first` crossings after the anchor's first.
+SubtreeRecord interpolated_record(const SubtreeCorners& corners, double cell_px, double fx, double fy,
+                                  std::vector<GridCrossing>* crossings, std::size_t anchor_first) {
+  SubtreeRecord rec;
+  rec.id = corners.record[0]->id;
+  const double beta[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
+  double weight = 0, b = 0, o = 0, c = 0;
+  for (int i = 0; i < 4; ++i) weight += beta[i] * corners.record[i]->weight;
+  rec.weight = static_cast<float>(weight);
+  rec.first = static_cast<std::uint32_t>(crossings->size() - anchor_first);
+  interpolate_subtree(corners, cell_px, fx, fy, crossings, &b, &o, &c);
+  rec.count = static_cast<std::uint32_t>(crossings->size() - anchor_first) - rec.first;
+  rec.background = static_cast<float>(b);
+  rec.opaque = static_cast<float>(o);
+  rec.cut = static_cast<float>(c);
+  return rec;
+}
+
+}  // namespace
+
 void AnchorRow::add_interpolated(const SubtreeCorners& chain, const SubtreeCorners* subtrees, std::size_t count,
                                  double cell_px, double fx, double fy, bool met_solid) {
   const std::size_t first_crossing = crossings_.size();
-  const auto here = [&] { return static_cast<std::uint32_t>(crossings_.size() - first_crossing); };
   double background = 0, opaque = 0, cut = 0;
   interpolate_subtree(chain, cell_px, fx, fy, &crossings_, &background, &opaque, &cut);
   SubtreeRecord chain_record;
@@ -100,22 +122,9 @@ void AnchorRow::add_interpolated(const SubtreeCorners& chain, const SubtreeCorne
   chain_record.background = static_cast<float>(background);
   chain_record.opaque = static_cast<float>(opaque);
   chain_record.cut = static_cast<float>(cut);
-  chain_record.count = here();
-  const double beta[4] = {(1 - fx) * (1 - fy), fx * (1 - fy), (1 - fx) * fy, fx * fy};
-  for (std::size_t j = 0; j < count; ++j) {
-    const SubtreeCorners& corners = subtrees[j];
-    SubtreeRecord& rec = subtrees_.emplace_back();
-    rec.id = corners.record[0]->id;
-    double weight = 0, b = 0, o = 0, c = 0;
-    for (int i = 0; i < 4; ++i) weight += beta[i] * corners.record[i]->weight;
-    rec.weight = static_cast<float>(weight);
-    rec.first = here();
-    interpolate_subtree(corners, cell_px, fx, fy, &crossings_, &b, &o, &c);
-    rec.count = here() - rec.first;
-    rec.background = static_cast<float>(b);
-    rec.opaque = static_cast<float>(o);
-    rec.cut = static_cast<float>(c);
-  }
+  chain_record.count = static_cast<std::uint32_t>(crossings_.size() - first_crossing);
+  for (std::size_t j = 0; j < count; ++j)
+    subtrees_.push_back(interpolated_record(subtrees[j], cell_px, fx, fy, &crossings_, first_crossing));
   chain_.push_back(chain_record);
   chain_ok_.push_back(1);
   begin_.push_back(static_cast<std::uint32_t>(crossings_.size()));
@@ -123,6 +132,27 @@ void AnchorRow::add_interpolated(const SubtreeCorners& chain, const SubtreeCorne
   background_.push_back(background);
   opaque_.push_back(opaque);
   met_solid_.push_back(met_solid);
+}
+
+double AnchorRow::append_interpolated_subtrees(const SubtreeCorners* const* subtrees, std::size_t count,
+                                             double cell_px, double fx, double fy) {
+  const std::size_t first_crossing = begin_[begin_.size() - 2];
+  SubtreeRecord& chain = chain_.back();
+  double cut = 0;
+  for (std::size_t j = 0; j < count; ++j) {
+    const SubtreeRecord rec = interpolated_record(*subtrees[j], cell_px, fx, fy, &crossings_, first_crossing);
+    subtrees_.push_back(rec);
+    // The whole trace's light (the anchor's and its chain record's) takes the subtree's.
+    background_.back() += rec.background;
+    opaque_.back() += rec.opaque;
+    chain.background += rec.background;
+    chain.opaque += rec.opaque;
+    chain.cut += rec.cut;
+    cut += rec.cut;
+  }
+  begin_.back() = static_cast<std::uint32_t>(crossings_.size());
+  subtree_begin_.back() = static_cast<std::uint32_t>(subtrees_.size());
+  return cut;
 }
 
 const SubtreeRecord* AnchorRow::find_subtree(int i, std::uint64_t id) const {

@@ -69,6 +69,12 @@ class AnchorRow {
   // met_solid: the corners'.
   void add_interpolated(const SubtreeCorners& chain, const SubtreeCorners* subtrees, std::size_t count,
                         double cell_px, double fx, double fy, bool met_solid);
+  // Appends to the last anchor the subtrees its trace deferred (`count` of
+  // them, each interpolated at (fx, fy) of a coarser cell from its corners),
+  // each a subtree record of its own, their light added to the anchor's.
+  // Returns their cut light (statistics).
+  double append_interpolated_subtrees(const SubtreeCorners* const* subtrees, std::size_t count, double cell_px,
+                                    double fx, double fy);
   int size() const { return static_cast<int>(met_solid_.size()); }
   // Anchor i's crossings, all of them, as traced.
   const GridCrossing* crossings(int i) const { return crossings_.data() + begin_[at(i)]; }

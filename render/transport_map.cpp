@@ -246,6 +246,7 @@ void fill_anchor_row_from_coarse(const TraceScene& scene, const SceneIndex& inde
   thread_local TraceResult r;
   thread_local std::vector<Eigen::Vector2d> pixels;
   thread_local std::vector<std::optional<CameraRay>> rays;
+  thread_local std::vector<const SubtreeCorners*> deferred_list;
   const double inv_samples = 1.0 / (static_cast<double>(lattice.k) * lattice.k);
   const double coarse_cell_px = static_cast<double>(coarse.lattice.g) / lattice.k;
   const int cells_x = coarse.lattice.cells_x(), cells_y = coarse.lattice.cells_y();
@@ -253,12 +254,12 @@ void fill_anchor_row_from_coarse(const TraceScene& scene, const SceneIndex& inde
   struct Place {
     int cx = 0, cy = 0;
     double fx = 0, fy = 0;
-    bool whole = false;
+    bool in_cell = false, whole = false;
   };
   const auto place = [&](int ax) {
     Place p;
-    if (coarse_cell_of(ax, cells_x, &p.cx, &p.fx) && coarse_cell_of(ay, cells_y, &p.cy, &p.fy))
-      p.whole = coarse.cells[static_cast<std::size_t>(p.cy)].agrees_whole(p.cx);
+    p.in_cell = coarse_cell_of(ax, cells_x, &p.cx, &p.fx) && coarse_cell_of(ay, cells_y, &p.cy, &p.fy);
+    p.whole = p.in_cell && coarse.cells[static_cast<std::size_t>(p.cy)].agrees_whole(p.cx);
     return p;
   };
   const auto is_coarse = [&](int ax) { return ax % 2 == 0 && ay % 2 == 0; };
@@ -292,9 +293,33 @@ void fill_anchor_row_from_coarse(const TraceScene& scene, const SceneIndex& inde
       out->add(nullptr, inv_samples);
       continue;
     }
-    trace_ray(scene, index, *ray, options, &r);
+    // In a coarse cell that does not agree whole, the subtrees that agree in
+    // it are deferred and interpolated, as for a sample between anchors.
+    DeferredSubtrees deferred;
+    const SubtreeCorners* deferred_corners = nullptr;
+    if (p.in_cell) {
+      const CellRow& cr = coarse.cells[static_cast<std::size_t>(p.cy)];
+      const std::uint32_t first = cr.begin[static_cast<std::size_t>(p.cx)];
+      deferred_corners = cr.agreeing.corners.data() + first;
+      deferred.ids = cr.agreeing.ids.data() + first;
+      deferred.min_weight = cr.agreeing.min_weight.data() + first;
+      deferred.max_weight = cr.agreeing.max_weight.data() + first;
+      deferred.count = cr.begin[static_cast<std::size_t>(p.cx) + 1] - first;
+    }
+    trace_ray(scene, index, *ray, options, &r, deferred);
     stats->add(r, inv_samples);
     out->add(&r, inv_samples);
+    if (r.deferred.empty()) continue;
+    deferred_list.clear();
+    for (std::uint64_t id : r.deferred) {
+      // The tracer defers only the ids it was given: the cell's agreeing subtrees.
+      const auto j = static_cast<std::size_t>(std::find(deferred.ids, deferred.ids + deferred.count, id) - deferred.ids);
+      assert(j < deferred.count);
+      deferred_list.push_back(deferred_corners + j);
+    }
+    stats->cut_weight +=
+        out->append_interpolated_subtrees(deferred_list.data(), deferred_list.size(), coarse_cell_px, p.fx, p.fy);
+    stats->interpolated += static_cast<long>(r.deferred.size());
   }
 }
 
