@@ -143,7 +143,7 @@ void render_camera(const RenderOptions& o, const std::string& camera_name, const
   options.grid_whole_samples = o.whole_samples;
   options.reflection_grid_levels = o.reflection_grid_levels > 0
                                        ? o.reflection_grid_levels
-                                       : render_trace_options(!o.no_reflections).reflection_grid_levels;
+                                       : (o.whole_samples ? render_trace_options(!o.no_reflections).reflection_grid_levels : 1);
   options.max_depth = o.max_depth;
   options.reflections = !o.no_reflections;
   const Camera& camera = ps.camera();
@@ -278,8 +278,8 @@ void register_render_command(CLI::App& app) {
               "(default: on)");
   r->add_option("--reflection-grid-levels", o->reflection_grid_levels,
                 "2: trace the grid's anchors themselves on a grid twice as coarse and interpolate an anchor whole "
-                "where its coarse cell agrees on everything (1: trace every anchor; default 2 with reflections, 1 with "
-                "--no-reflections; bench/RESULTS.md tables the error)")
+                "where its coarse cell agrees on everything (1: trace every anchor; default 2 with reflections and whole "
+                "samples, else 1; bench/RESULTS.md tables the error)")
       ->check(CLI::Range(1, 2));
   r->add_option("--max-depth", o->max_depth, "Most interface events on one path")
       ->check(CLI::Range(1, 1000))
