@@ -142,38 +142,20 @@ std::optional<CameraRay> pixel_camera_ray(const CameraModel& model, const RigidT
 }
 
 void pixel_camera_rays(const CameraModel& model, const RigidTransform& camera_from_world,
-                       const std::vector<Eigen::Vector2d>& pixels, std::vector<std::optional<CameraRay>>* rays) {
-  rays->resize(pixels.size());
-  UnprojectResult u[CameraModel::kUnprojectBatch];
-  for (std::size_t first = 0; first < pixels.size(); first += CameraModel::kUnprojectBatch) {
-    const int count = static_cast<int>(std::min<std::size_t>(CameraModel::kUnprojectBatch, pixels.size() - first));
-    model.unproject_batch(pixels.data() + first, count, u);
-    for (int i = 0; i < count; ++i) (*rays)[first + static_cast<std::size_t>(i)] = camera_ray_of(u[i], camera_from_world);
-  }
-}
-
-void pixel_camera_rays(const CameraModel& model, const RigidTransform& camera_from_world,
                        const std::vector<Eigen::Vector2d>& pixels, std::vector<std::optional<CameraRay>>* rays,
                        CameraRayWarmStart* warm) {
   constexpr int kBatch = CameraModel::kUnprojectBatch;
   rays->resize(pixels.size());
   UnprojectResult u[kBatch];
-  Eigen::Vector2d near_pixels[kBatch];
-  UnprojectResult near[kBatch];
   for (std::size_t first = 0; first < pixels.size(); first += kBatch) {
     const int count = static_cast<int>(std::min<std::size_t>(kBatch, pixels.size() - first));
-    // Lane l starts from the previous batch's lane l (a lane it lacks: cold).
-    for (int l = 0; l < count; ++l) {
-      near_pixels[l] = l < warm->count ? warm->pixels[l] : pixels[first + static_cast<std::size_t>(l)];
-      near[l] = l < warm->count ? warm->results[l] : UnprojectResult{};
-    }
-    model.unproject_batch_near(pixels.data() + first, count, near_pixels, near, u);
+    // Lane l starts from the previous batch's lane l (none yet: cold).
+    model.unproject_batch_near(pixels.data() + first, count, warm->pixels, warm->results, u);
     for (int l = 0; l < count; ++l) {
       (*rays)[first + static_cast<std::size_t>(l)] = camera_ray_of(u[l], camera_from_world);
       warm->pixels[l] = pixels[first + static_cast<std::size_t>(l)];
       warm->results[l] = u[l];
     }
-    warm->count = std::max(warm->count, count);
   }
 }
 

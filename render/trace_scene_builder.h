@@ -56,23 +56,23 @@ std::optional<WorldRay> pixel_world_ray(const CameraModel& model, const RigidTra
 // (x, y, 1) in the camera frame, rotated to the world). std::nullopt as above.
 std::optional<CameraRay> pixel_camera_ray(const CameraModel& model, const RigidTransform& camera_from_world,
                                           const Eigen::Vector2d& pixel);
-// pixel_camera_ray for each of `pixels`, equal to it to the bit, with the
-// unprojections interleaved (CameraModel::unproject_batch): about 1.5x faster.
-void pixel_camera_rays(const CameraModel& model, const RigidTransform& camera_from_world,
-                       const std::vector<Eigen::Vector2d>& pixels, std::vector<std::optional<CameraRay>>* rays);
-
 // What pixel_camera_rays carries along a row from one batch of pixels to the
-// next (and from call to call): the last batch's pixels and unprojections.
+// next (and from call to call): the last batch's pixels and unprojections,
+// lane by lane. A fresh one holds no solution (not ok): its first batch
+// starts cold.
 struct CameraRayWarmStart {
+  CameraRayWarmStart() {
+    for (Eigen::Vector2d& p : pixels) p.setZero();
+  }
   Eigen::Vector2d pixels[CameraModel::kUnprojectBatch];
   UnprojectResult results[CameraModel::kUnprojectBatch];
-  int count = 0;  // none yet: the first batch starts cold
 };
-// pixel_camera_rays with each batch's unprojections started from the previous
-// batch's (CameraModel::unproject_batch_near; *warm carries them on): for
-// pixels listed along a row, about a Newton step fewer each. The rays agree
-// with pixel_camera_ray's to the unprojection's tolerance (1e-10 px), not to
-// the bit.
+// pixel_camera_ray for each of `pixels`, the unprojections interleaved and
+// each batch's started from the previous batch's, lane by lane
+// (CameraModel::unproject_batch_near; *warm carries them on): for pixels
+// listed along a row, about a Newton step fewer each. The rays agree with
+// pixel_camera_ray's to the unprojection's tolerance (1e-10 px), not to the
+// bit.
 void pixel_camera_rays(const CameraModel& model, const RigidTransform& camera_from_world,
                        const std::vector<Eigen::Vector2d>& pixels, std::vector<std::optional<CameraRay>>* rays,
                        CameraRayWarmStart* warm);

@@ -194,7 +194,31 @@ struct CellRow {
   std::vector<SubtreeCorners> chains;  // per cell (valid where whole)
 
   bool agrees_whole(int cx) const { return !whole.empty() && whole[static_cast<std::size_t>(cx)] != 0; }
+  // What a sample in cell cx defers (the cell's agreeing subtrees), and where
+  // their corners lie.
+  DeferredSubtrees deferred(int cx, const SubtreeCorners** corners) const {
+    const std::uint32_t first = begin[static_cast<std::size_t>(cx)];
+    DeferredSubtrees d;
+    d.ids = agreeing.ids.data() + first;
+    d.min_weight = agreeing.min_weight.data() + first;
+    d.max_weight = agreeing.max_weight.data() + first;
+    d.count = begin[static_cast<std::size_t>(cx) + 1] - first;
+    *corners = agreeing.corners.data() + first;
+    return d;
+  }
 };
+
+// The corners of each subtree the tracer deferred (r.deferred, in its order):
+// it defers only the ids it was given, `offered`, whose corners are `corners`.
+void deferred_corners(const std::vector<std::uint64_t>& deferred, const DeferredSubtrees& offered,
+                      const SubtreeCorners* corners, std::vector<const SubtreeCorners*>* out) {
+  out->clear();
+  for (std::uint64_t id : deferred) {
+    const auto j = static_cast<std::size_t>(std::find(offered.ids, offered.ids + offered.count, id) - offered.ids);
+    assert(j < offered.count);
+    out->push_back(corners + j);
+  }
+}
 
 // The cells of cell row cy between anchor rows top and bottom: their agreeing
 // subtrees and, with `whole`, which agree whole.
@@ -296,27 +320,13 @@ void fill_anchor_row_from_coarse(const TraceScene& scene, const SceneIndex& inde
     // In a coarse cell that does not agree whole, the subtrees that agree in
     // it are deferred and interpolated, as for a sample between anchors.
     DeferredSubtrees deferred;
-    const SubtreeCorners* deferred_corners = nullptr;
-    if (p.in_cell) {
-      const CellRow& cr = coarse.cells[static_cast<std::size_t>(p.cy)];
-      const std::uint32_t first = cr.begin[static_cast<std::size_t>(p.cx)];
-      deferred_corners = cr.agreeing.corners.data() + first;
-      deferred.ids = cr.agreeing.ids.data() + first;
-      deferred.min_weight = cr.agreeing.min_weight.data() + first;
-      deferred.max_weight = cr.agreeing.max_weight.data() + first;
-      deferred.count = cr.begin[static_cast<std::size_t>(p.cx) + 1] - first;
-    }
+    const SubtreeCorners* corners = nullptr;
+    if (p.in_cell) deferred = coarse.cells[static_cast<std::size_t>(p.cy)].deferred(p.cx, &corners);
     trace_ray(scene, index, *ray, options, &r, deferred);
     stats->add(r, inv_samples);
     out->add(&r, inv_samples);
     if (r.deferred.empty()) continue;
-    deferred_list.clear();
-    for (std::uint64_t id : r.deferred) {
-      // The tracer defers only the ids it was given: the cell's agreeing subtrees.
-      const auto j = static_cast<std::size_t>(std::find(deferred.ids, deferred.ids + deferred.count, id) - deferred.ids);
-      assert(j < deferred.count);
-      deferred_list.push_back(deferred_corners + j);
-    }
+    deferred_corners(r.deferred, deferred, corners, &deferred_list);
     stats->cut_weight +=
         out->append_interpolated_subtrees(deferred_list.data(), deferred_list.size(), coarse_cell_px, p.fx, p.fy);
     stats->interpolated += static_cast<long>(r.deferred.size());
@@ -336,6 +346,7 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
   thread_local std::vector<Eigen::Vector2d> pixels;
   thread_local std::vector<std::optional<CameraRay>> rays;
   thread_local std::vector<GridCrossing> interpolated;
+  thread_local std::vector<const SubtreeCorners*> deferred_list;
   scratch.clear();
   const int width = camera.width_px(), k = lattice.k, g = lattice.g;
   const double inv_samples = 1.0 / (static_cast<double>(k) * k);
@@ -392,28 +403,17 @@ void trace_row_on_grid(const TraceScene& scene, const SceneIndex& index, const C
           continue;
         }
         DeferredSubtrees deferred;
-        const SubtreeCorners* deferred_corners = nullptr;
-        if (lattice.in_cell(x, y)) {
-          const CellRow& cr = cells[static_cast<std::size_t>(y / g)];
-          const std::uint32_t first = cr.begin[static_cast<std::size_t>(x / g)];
-          deferred_corners = cr.agreeing.corners.data() + first;
-          deferred.ids = cr.agreeing.ids.data() + first;
-          deferred.min_weight = cr.agreeing.min_weight.data() + first;
-          deferred.max_weight = cr.agreeing.max_weight.data() + first;
-          deferred.count = cr.begin[static_cast<std::size_t>(x / g) + 1] - first;
-        }
+        const SubtreeCorners* corners = nullptr;
+        if (lattice.in_cell(x, y)) deferred = cells[static_cast<std::size_t>(y / g)].deferred(x / g, &corners);
         trace_ray(scene, index, *ray, options, &r, deferred);
         out->stats.add(r, inv_samples);
         pixel.add_traced(r, inv_samples, &scratch);
         if (r.deferred.empty()) continue;
+        deferred_corners(r.deferred, deferred, corners, &deferred_list);
         interpolated.clear();
         double cut = 0;
-        for (std::uint64_t id : r.deferred) {
-          // The tracer defers only the ids it was given: the cell's agreeing subtrees.
-          const auto j = static_cast<std::size_t>(std::find(deferred.ids, deferred.ids + deferred.count, id) - deferred.ids);
-          assert(j < deferred.count);
-          interpolate_subtree(deferred_corners[j], cell_px, fx, fy, &interpolated, &pixel.background, &pixel.opaque, &cut);
-        }
+        for (const SubtreeCorners* c : deferred_list)
+          interpolate_subtree(*c, cell_px, fx, fy, &interpolated, &pixel.background, &pixel.opaque, &cut);
         pixel.add_crossings(interpolated.data(), interpolated.size(), &scratch);
         out->stats.cut_weight += cut;
         out->stats.interpolated += static_cast<long>(r.deferred.size());
