@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "render/embree_device.h"
@@ -98,30 +100,42 @@ void solid_bounds(const RTCBoundsFunctionArguments* args) {
   out->upper_z = std::nextafter(static_cast<float>(b.max().z()), INFINITY);
 }
 
+// The next float above f >= 0 (std::nextafter(f, INFINITY) without the
+// library call: one per accepted candidate); +infinity stays.
+float next_float_up(float f) {
+  if (!(f < INFINITY)) return f;
+  std::uint32_t bits;
+  std::memcpy(&bits, &f, sizeof bits);
+  ++bits;  // f >= 0 (+0 included): the next representable value up
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
+
 void solid_intersect(const RTCIntersectFunctionNArguments* args) {
   if (!args->valid[0]) return;
   auto* q = reinterpret_cast<QueryContext*>(args->context);
   const int index = static_cast<int>(args->primID);
   if (index == q->skip_index) return;
-  double t;
-  std::optional<Hit> other;
+  // Whether t (of this candidate) is the best so far; if so it is kept, and
+  // Embree culls candidates beyond it, conservatively (next float up).
+  const auto keep = [&](double t) {
+    if (q->have_best && !(t < q->best_t || (t == q->best_t && index < q->best_index))) return false;
+    q->have_best = true;
+    q->best_t = t;
+    q->best_index = index;
+    float& tfar = RTCRayN_tfar(RTCRayHitN_RayN(args->rayhit, args->N), args->N, 0);
+    tfar = std::min(tfar, next_float_up(static_cast<float>(t)));
+    return true;
+  };
   if (const Sphere* sphere = (*q->sphere_of)[args->primID]) {
-    const std::optional<double> ts = sphere_hit_t(*sphere, *q->o, *q->d, q->t_min);
-    if (!ts) return;
-    t = *ts;
-  } else {
-    other = intersect((*q->shapes)[args->primID], *q->o, *q->d, q->t_min);
-    if (!other) return;
-    t = other->t;
+    // Its hit is built after the traversal, for the winner only (best_other is
+    // then not read). No optional<Hit> here: making one zero-fills it.
+    const std::optional<double> t = sphere_hit_t(*sphere, *q->o, *q->d, q->t_min);
+    if (t) keep(*t);
+    return;
   }
-  if (q->have_best && !(t < q->best_t || (t == q->best_t && index < q->best_index))) return;
-  q->have_best = true;
-  q->best_t = t;
-  q->best_index = index;
-  q->best_other = std::move(other);
-  // Let Embree cull candidates beyond the best hit, conservatively (next float up).
-  float& tfar = RTCRayN_tfar(RTCRayHitN_RayN(args->rayhit, args->N), args->N, 0);
-  tfar = std::min(tfar, std::nextafter(static_cast<float>(t), INFINITY));
+  std::optional<Hit> other = intersect((*q->shapes)[args->primID], *q->o, *q->d, q->t_min);
+  if (other && keep(other->t)) q->best_other = std::move(other);
 }
 
 }  // namespace
