@@ -4,11 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <limits>
 
 #include "render/embree_device.h"
+#include "render/float_outward.h"
 
 namespace glasspiv {
 
@@ -92,23 +91,12 @@ void solid_bounds(const RTCBoundsFunctionArguments* args) {
   const Eigen::AlignedBox3d& b = (*boxes)[args->primID];
   RTCBounds* out = args->bounds_o;
   // Rounded outwards so the float box contains the double one.
-  out->lower_x = std::nextafter(static_cast<float>(b.min().x()), -INFINITY);
-  out->lower_y = std::nextafter(static_cast<float>(b.min().y()), -INFINITY);
-  out->lower_z = std::nextafter(static_cast<float>(b.min().z()), -INFINITY);
-  out->upper_x = std::nextafter(static_cast<float>(b.max().x()), INFINITY);
-  out->upper_y = std::nextafter(static_cast<float>(b.max().y()), INFINITY);
-  out->upper_z = std::nextafter(static_cast<float>(b.max().z()), INFINITY);
-}
-
-// The next float above f >= 0 (std::nextafter(f, INFINITY) without the
-// library call: one per accepted candidate); +infinity stays.
-float next_float_up(float f) {
-  if (!(f < INFINITY)) return f;
-  std::uint32_t bits;
-  std::memcpy(&bits, &f, sizeof bits);
-  ++bits;  // f >= 0 (+0 included): the next representable value up
-  std::memcpy(&f, &bits, sizeof f);
-  return f;
+  out->lower_x = float_down(b.min().x());
+  out->lower_y = float_down(b.min().y());
+  out->lower_z = float_down(b.min().z());
+  out->upper_x = float_up(b.max().x());
+  out->upper_y = float_up(b.max().y());
+  out->upper_z = float_up(b.max().z());
 }
 
 void solid_intersect(const RTCIntersectFunctionNArguments* args) {
@@ -124,7 +112,7 @@ void solid_intersect(const RTCIntersectFunctionNArguments* args) {
     q->best_t = t;
     q->best_index = index;
     float& tfar = RTCRayN_tfar(RTCRayHitN_RayN(args->rayhit, args->N), args->N, 0);
-    tfar = std::min(tfar, next_float_up(static_cast<float>(t)));
+    tfar = std::min(tfar, float_up(t));
     return true;
   };
   if (const Sphere* sphere = (*q->sphere_of)[args->primID]) {

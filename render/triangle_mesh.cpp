@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "render/embree_device.h"
+#include "render/float_outward.h"
 
 namespace glasspiv {
 
@@ -196,9 +197,6 @@ bool test_triangle(const Data& m, const Ray& r, std::uint32_t k, TriHit* out) {
 // diagonal D near the mesh; the triangles' float boxes are padded by 1e-5 D, so
 // float traversal never skips a triangle the double test would accept. Every
 // candidate is decided by test_triangle on the double ray kept in the context.
-
-float float_down(double x) { return std::nextafter(static_cast<float>(x), -std::numeric_limits<float>::infinity()); }
-float float_up(double x) { return std::nextafter(static_cast<float>(x), std::numeric_limits<float>::infinity()); }
 
 struct Query {
   const Data* mesh = nullptr;
