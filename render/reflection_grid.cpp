@@ -19,6 +19,18 @@ GridCrossing grid_crossing(const SheetCrossing& c, double scale) {
   return g;
 }
 
+void AnchorRow::clear() {
+  begin_.assign(1, 0);
+  subtree_begin_.assign(1, 0);
+  crossings_.clear();
+  subtrees_.clear();
+  background_.clear();
+  opaque_.clear();
+  met_solid_.clear();
+  chain_.clear();
+  chain_ok_.clear();
+}
+
 void AnchorRow::add(const TraceResult* r, double scale) {
   const std::uint32_t first_crossing = static_cast<std::uint32_t>(crossings_.size());
   const std::size_t first_subtree = subtrees_.size();

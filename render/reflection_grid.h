@@ -75,6 +75,8 @@ class AnchorRow {
   // Returns their cut light (statistics).
   double append_interpolated_subtrees(const SubtreeCorners* const* subtrees, std::size_t count, double cell_px,
                                     double fx, double fy);
+  // Empties the row, keeping its buffers' capacity for the next row.
+  void clear();
   int size() const { return static_cast<int>(met_solid_.size()); }
   // Anchor i's crossings, all of them, as traced.
   const GridCrossing* crossings(int i) const { return crossings_.data() + begin_[at(i)]; }
@@ -137,6 +139,13 @@ struct AgreeingSubtrees {
   std::vector<std::uint64_t> ids;
   std::vector<double> min_weight, max_weight;
   std::vector<SubtreeCorners> corners;
+
+  void clear() {
+    ids.clear();
+    min_weight.clear();
+    max_weight.clear();
+    corners.clear();
+  }
 };
 
 // The subtrees that agree in the cell of top-left anchor `col`, in the order

@@ -193,6 +193,13 @@ struct CellRow {
   std::vector<std::uint8_t> whole;     // cells_x, or empty
   std::vector<SubtreeCorners> chains;  // per cell (valid where whole)
 
+  // Empties the row, keeping its buffers' capacity for the next row.
+  void clear() {
+    begin.clear();
+    agreeing.clear();
+    whole.clear();
+    chains.clear();
+  }
   bool agrees_whole(int cx) const { return !whole.empty() && whole[static_cast<std::size_t>(cx)] != 0; }
   // What a sample in cell cx defers (the cell's agreeing subtrees), and where
   // their corners lie.
@@ -239,6 +246,33 @@ void compare_cell_row(const AnchorRow& top, const AnchorRow& bottom, int cells_x
                                                                   &cr->chains[static_cast<std::size_t>(cx)]);
   }
 }
+
+// Anchor and cell rows a band has finished with, kept with their buffers'
+// capacity for the next band's rows: a row begun from empty vectors grows them
+// by reallocation, every new block copied into and first touched page by page
+// (6-8 % of a render's time with the grid, in the kernel's page faults and in
+// memcpy).
+template <class Row>
+class SpareRows {
+ public:
+  // rows[first, end) take spare rows (empty, their capacity kept) while any are left.
+  void reuse(std::vector<Row>* rows, int first, int end) {
+    for (int i = first; i < end && !spare_.empty(); ++i) {
+      (*rows)[static_cast<std::size_t>(i)] = std::move(spare_.back());
+      spare_.pop_back();
+    }
+  }
+  // rows[i] is read no more.
+  void release(std::vector<Row>* rows, int i) {
+    Row& r = (*rows)[static_cast<std::size_t>(i)];
+    r.clear();
+    spare_.push_back(std::move(r));
+    r = Row{};
+  }
+
+ private:
+  std::vector<Row> spare_;
+};
 
 // The coarse level of TraceOptions::reflection_grid_levels 2: anchors every
 // 2g samples (traced whole), their cells compared.
@@ -471,9 +505,12 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
   const int requested_threads = *threads;
   *threads = 0;
   // A band of pixel rows at a time: its anchor rows traced, their cells
-  // compared, its rows traced, and the anchor rows no later band reads freed,
-  // so that the anchors never all wait beside the finished rows.
+  // compared, its rows traced, and the anchor rows no later band reads freed
+  // (their buffers kept for the next band's), so that the anchors never all
+  // wait beside the finished rows.
   constexpr int kBandRows = 64;
+  SpareRows<AnchorRow> spare_anchors;
+  SpareRows<CellRow> spare_cells;
   int anchors_traced = 0, cells_compared = 0, anchors_freed = 0;
   // TraceOptions::reflection_grid_levels 2: the coarse grid the anchors come from.
   std::unique_ptr<CoarseGrid> coarse;
@@ -494,6 +531,7 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
       // The coarse rows and cells the band's fine anchor rows read.
       const int coarse_needed = std::min(coarse->lattice.anchors_y, (anchors_needed - 1) / 2 + 2);
       const int first_coarse = coarse_traced;
+      spare_anchors.reuse(&coarse->anchors, first_coarse, coarse_needed);
       parallel_rows(coarse_needed - first_coarse, requested_threads, [&](int i) {
         const auto cy = static_cast<std::size_t>(first_coarse + i);
         trace_anchor_row(scene, index, camera, camera_from_world, options, coarse->lattice, first_coarse + i,
@@ -501,6 +539,7 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
       });
       coarse_traced = coarse_needed;
       const int first_cell = coarse_compared, cells_end = std::min(coarse_needed - 1, coarse->lattice.cells_y());
+      spare_cells.reuse(&coarse->cells, first_cell, cells_end);
       parallel_rows(std::max(cells_end - first_cell, 0), requested_threads, [&](int i) {
         const auto cy = static_cast<std::size_t>(first_cell + i);
         compare_cell_row(coarse->anchors[cy], coarse->anchors[cy + 1], coarse->lattice.cells_x(), coarse_cell_px,
@@ -508,6 +547,7 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
       });
       coarse_compared = std::max(cells_end, first_cell);
     }
+    spare_anchors.reuse(&anchors, first_anchor, anchors_needed);
     parallel_rows(
         anchors_needed - first_anchor, requested_threads,
         [&](int i) {
@@ -523,6 +563,7 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
     reported += anchors_needed - first_anchor;
     anchors_traced = anchors_needed;
     const int first_cell = cells_compared, cells_end = std::min(anchors_needed - 1, lattice.cells_y());
+    spare_cells.reuse(&cells, first_cell, cells_end);
     parallel_rows(std::max(cells_end - first_cell, 0), requested_threads, [&](int i) {
       const auto cy = static_cast<std::size_t>(first_cell + i);
       compare_cell_row(anchors[cy], anchors[cy + 1], lattice.cells_x(), cell_px, tolerance, options.grid_whole_samples,
@@ -540,15 +581,15 @@ std::vector<RowBuffer> trace_rows(const TraceScene& scene, const SceneIndex& ind
     reported += end_row - first_row;
     const int still_read = end_row < height ? anchor_rows_of(lattice, end_row).first : anchor_rows;
     for (; anchors_freed < still_read; ++anchors_freed) {
-      anchors[static_cast<std::size_t>(anchors_freed)] = AnchorRow{};
-      cells[static_cast<std::size_t>(anchors_freed)] = CellRow{};
+      spare_anchors.release(&anchors, anchors_freed);
+      spare_cells.release(&cells, anchors_freed);
     }
     // Fine anchor rows from anchors_traced on read coarse cell rows from
     // anchors_traced / 2 - 1 on (coarse_cell_of).
     if (coarse)
       for (; coarse_freed < std::min(anchors_traced / 2 - 1, coarse_traced); ++coarse_freed) {
-        coarse->anchors[static_cast<std::size_t>(coarse_freed)] = AnchorRow{};
-        coarse->cells[static_cast<std::size_t>(coarse_freed)] = CellRow{};
+        spare_anchors.release(&coarse->anchors, coarse_freed);
+        spare_cells.release(&coarse->cells, coarse_freed);
       }
   }
   for (const RowStats& st : coarse_stats) anchor_stats->push_back(st);
