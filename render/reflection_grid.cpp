@@ -323,11 +323,17 @@ void interpolate_subtree(const SubtreeCorners& corners, double cell_px, double f
     g.dt_dcol = static_cast<float>(blend(dt_dcol));
     g.dt_drow = static_cast<float>(blend(dt_drow));
   }
+  // The sums in locals: through the three pointers, which may alias for all
+  // the compiler knows, every term was a store and a reload.
+  double b = *background, o = *opaque, c = *cut;
   for (int i = 0; i < 4; ++i) {
-    *background += beta[i] * corners.record[i]->background;
-    *opaque += beta[i] * corners.record[i]->opaque;
-    *cut += beta[i] * corners.record[i]->cut;
+    b += beta[i] * corners.record[i]->background;
+    o += beta[i] * corners.record[i]->opaque;
+    c += beta[i] * corners.record[i]->cut;
   }
+  *background = b;
+  *opaque = o;
+  *cut = c;
 }
 
 }  // namespace glasspiv
