@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -13,10 +15,18 @@ int parallel_rows(int rows, int threads, const std::function<void(int)>& row_fn,
   if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   threads = std::max(1, std::min(threads, rows));
   std::atomic<int> next_row{0}, rows_done{0};
+  // The last row wakes the reporting thread: a plain 50 ms sleep between
+  // reports kept it up to 50 ms past the end of every call (the reflection
+  // grid makes two such calls per band of 64 rows: 1.7 s of a 6 s render).
+  std::mutex finished_mutex;
+  std::condition_variable finished;
   auto worker = [&]() {
     for (int row = next_row.fetch_add(1); row < rows; row = next_row.fetch_add(1)) {
       row_fn(row);
-      rows_done.fetch_add(1);
+      if (rows_done.fetch_add(1) + 1 == rows) {
+        const std::lock_guard<std::mutex> lock(finished_mutex);
+        finished.notify_all();
+      }
     }
   };
   std::vector<std::thread> pool;
@@ -28,7 +38,8 @@ int parallel_rows(int rows, int threads, const std::function<void(int)>& row_fn,
       const int done = rows_done.load();
       if (done != reported) progress(reported = done, rows);
       if (done >= rows) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      std::unique_lock<std::mutex> lock(finished_mutex);
+      finished.wait_for(lock, std::chrono::milliseconds(50), [&] { return rows_done.load() >= rows; });
     }
   }
   for (std::thread& th : pool) th.join();
