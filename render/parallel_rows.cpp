@@ -17,7 +17,8 @@ int parallel_rows(int rows, int threads, const std::function<void(int)>& row_fn,
   std::atomic<int> next_row{0}, rows_done{0};
   // The last row wakes the reporting thread: a plain 50 ms sleep between
   // reports kept it up to 50 ms past the end of every call (the reflection
-  // grid makes two such calls per band of 64 rows: 1.7 s of a 6 s render).
+  // grid makes two such calls per band of 64 rows: the reactor's whole camera
+  // traced in 6.1 s instead of 3.7, in 3.8 s instead of 1.2 without reflections).
   std::mutex finished_mutex;
   std::condition_variable finished;
   auto worker = [&]() {
