@@ -4,6 +4,7 @@
 #include <cassert>
 #include <stdexcept>
 
+#include "render/parallel_rows.h"
 #include "util/huge_pages.h"
 
 namespace glasspiv {
@@ -96,7 +97,7 @@ std::size_t CrossingSink::size() const {
   return total_;
 }
 
-void CrossingSink::move_into(TransportMap* map) {
+void CrossingSink::move_into(TransportMap* map, int threads) {
   const std::lock_guard<std::mutex> lock(mutex_);
   if (next_ != rows_) throw std::logic_error("CrossingSink: not every row was committed");
   std::vector<float>* to[kFloatArrays] = {&map->s_mm,    &map->t_mm,    &map->weight, &map->ds_dcol,
@@ -104,8 +105,14 @@ void CrossingSink::move_into(TransportMap* map) {
   for (std::vector<float>* v : to) reserve_huge(v, v->size() + total_);
   reserve_huge(&map->tag, map->tag.size() + total_);
   for (std::unique_ptr<Chunk>& chunk : chunks_) {
-    for (int i = 0; i < kFloatArrays; ++i) to[i]->insert(to[i]->end(), chunk->array(i), chunk->array(i) + chunk->size);
-    map->tag.insert(map->tag.end(), chunk->tags.data(), chunk->tags.data() + chunk->size);
+    // The arrays side by side: the copy is mostly first touches of the map's
+    // pages, which the kernel serves on each thread at once.
+    parallel_rows(kFloatArrays + 1, threads, [&](int i) {
+      if (i < kFloatArrays)
+        to[i]->insert(to[i]->end(), chunk->array(i), chunk->array(i) + chunk->size);
+      else
+        map->tag.insert(map->tag.end(), chunk->tags.data(), chunk->tags.data() + chunk->size);
+    });
     chunk.reset();  // given back before the next is copied
   }
   chunks_.clear();

@@ -42,9 +42,11 @@ class CrossingSink {
   // The crossings of the rows in order so far (every row's, once all are in).
   std::size_t size() const;
   // Once every row is in: appends the crossings to map's crossing arrays
-  // (s_mm ... tag), in row order, giving each chunk back as it is copied.
-  // Throws std::logic_error when a row is missing.
-  void move_into(TransportMap* map);
+  // (s_mm ... tag), in row order, giving each chunk back as it is copied; the
+  // arrays are copied on up to `threads` threads (<= 0: hardware
+  // concurrency), each array by one. Throws std::logic_error when a row is
+  // missing.
+  void move_into(TransportMap* map, int threads = 1);
 
  private:
   struct Chunk;

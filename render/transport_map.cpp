@@ -642,7 +642,7 @@ TransportMap build_transport_map(const TraceScene& scene, const CameraModel& cam
   // Counts to offsets (no overflow: the sum is total).
   std::uint32_t offset = 0;
   for (std::size_t p = 1; p <= pixel_count; ++p) map.pixel_offsets[p] = offset += map.pixel_offsets[p];
-  sink.move_into(&map);
+  sink.move_into(&map, threads);
   for (const RowBuffer& rb : rows) rb.stats.add_to(&map.stats);
   for (const RowStats& st : anchor_stats) st.add_to(&map.stats);
   map.stats.crossings = static_cast<long>(total);

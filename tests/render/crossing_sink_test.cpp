@@ -8,8 +8,11 @@ namespace glasspiv {
 namespace {
 
 // Rows committed in a scrambled order, some empty, some larger than a chunk,
-// come out in row order with every value and tag where it belongs.
+// come out in row order with every value and tag where it belongs, the arrays
+// copied on one thread or several.
 TEST(CrossingSink, RowsComeOutInRowOrderWhateverOrderTheyFinish) {
+  for (int threads : {1, 3}) {
+  SCOPED_TRACE(threads);
   const int rows = 7;
   const std::size_t sizes[rows] = {3, 0, 70000, 5, 140000, 1, 2};
   const int order[rows] = {3, 0, 2, 1, 6, 4, 5};
@@ -29,7 +32,7 @@ TEST(CrossingSink, RowsComeOutInRowOrderWhateverOrderTheyFinish) {
   }
   EXPECT_THROW(sink.commit(2, &scratch), std::logic_error);
   TransportMap map;
-  sink.move_into(&map);
+  sink.move_into(&map, threads);
   std::size_t k = 0;
   for (int row = 0; row < rows; ++row)
     for (std::size_t i = 0; i < sizes[row]; ++i, ++k) {
@@ -39,7 +42,10 @@ TEST(CrossingSink, RowsComeOutInRowOrderWhateverOrderTheyFinish) {
       ASSERT_EQ(map.tag[k], row) << k;
     }
   EXPECT_EQ(k, map.weight.size());
+  EXPECT_EQ(map.ds_dcol.size(), k);
+  EXPECT_EQ(map.tag.size(), k);
   EXPECT_EQ(sink.size(), k);
+  }
 }
 
 TEST(CrossingSink, MissingRowIsRefused) {
