@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "apps/cli_files.h"
 #include "apps/commands.h"
 #include "apps/photo_detection.h"
 #include "targets/observations_io.h"
@@ -51,7 +52,7 @@ void run_detect(const DetectCommandOptions& o) {
                 grid_w, grid_h, spacing);
   }
   if (!o.detection.overlay_dir.empty())
-    std::printf("wrote %zu overlays to %s/\n", photos.size(), o.detection.overlay_dir.c_str());
+    std::printf("wrote %zu overlays to %s\n", photos.size(), folder_shown(o.detection.overlay_dir).c_str());
 }
 
 }  // namespace

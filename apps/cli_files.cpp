@@ -24,6 +24,10 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
+std::string folder_shown(const std::string& folder) {
+  return !folder.empty() && folder.back() == '/' ? folder : folder + "/";
+}
+
 void check_not_input(const std::string& input, const std::string& output) {
   std::error_code ec;
   if (fs::exists(output, ec) && fs::equivalent(input, output, ec))

@@ -10,6 +10,10 @@ struct Scene;
 // The extension of path, lower case, with its dot ("" if none).
 std::string lower_extension(const std::string& path);
 
+// A folder as a command prints it: with one trailing slash, whether or not
+// the user gave one ("out" and "out/" both print "out/").
+std::string folder_shown(const std::string& folder);
+
 // Throws InputError if output names the same file as input: glasspiv never
 // overwrites its inputs. (check_outputs does this and more for a whole command.)
 void check_not_input(const std::string& input, const std::string& output);

@@ -279,12 +279,11 @@ void run_one_camera(const CorrectOptions& o) {
       [&](std::size_t i, const Frame& f) { write_gray_image(outputs[i], f.result.data(), out_w, out_h, format); },
       [&](std::size_t done, std::size_t) { bar.set_done(done); });
   bar.finish();
-  const std::string folder = !o.output.empty() && o.output.back() == '/' ? o.output : o.output + "/";
   std::printf("corrected %s in %.2f s (%.1f frames/s, %s, %s grid %dx%d)%s; wrote %s\n",
               count_of(st.corrected, "frame").c_str(),
               st.seconds, st.corrected / std::max(1e-9, st.seconds), least ? "least squares" : "back-projection",
               on_camera ? "camera" : "sheet", out_w, out_h,
-              st.skipped ? fmt::format("; {} already done, skipped", st.skipped).c_str() : "", folder.c_str());
+              st.skipped ? fmt::format("; {} already done, skipped", st.skipped).c_str() : "", folder_shown(o.output).c_str());
 }
 
 void run_several_cameras(const CorrectOptions& o) {

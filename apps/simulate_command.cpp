@@ -352,8 +352,8 @@ void run_simulate(const SimulateOptions& o) {
   fs::create_directories(dir);
   write_files_atomically(writers);
   for (const std::string& w : e.warnings) std::fprintf(stderr, "glasspiv: warning: %s\n", w.c_str());
-  std::printf("simulated %zu tracers (%.4g per mm^3), largest displacement %.3g px, in %.2f s; wrote %s/\n", e.tracers,
-              e.tracers_per_mm3, e.max_displacement_px, clock.seconds(), o.output.c_str());
+  std::printf("simulated %zu tracers (%.4g per mm^3), largest displacement %.3g px, in %.2f s; wrote %s\n", e.tracers,
+              e.tracers_per_mm3, e.max_displacement_px, clock.seconds(), folder_shown(o.output).c_str());
 }
 
 }  // namespace
