@@ -20,6 +20,12 @@ struct Hit {
   // d(normal)/d(point) along the surface (the shape operator; zero for planes):
   // ray differentials use it to carry footprints through curved interfaces.
   Eigen::Matrix3d dnormal_dpoint = Eigen::Matrix3d::Zero();
+  // Where the shape operator is a multiple of the identity (an umbilic point:
+  // every point of a sphere, I / r), that multiple in 1/mm, and dnormal_dpoint
+  // is left zero: the tracer scales the differentials by it instead of
+  // multiplying by a 3 x 3 matrix: the same values (the product's other terms
+  // are zeros; only a -0 input may come out -0 where the product gave +0).
+  std::optional<double> umbilic_curvature_per_mm;
 };
 
 // Relative error bound for hit points and spawned origins: 64 ulp of the

@@ -93,8 +93,7 @@ Hit sphere_hit(const Sphere& s, const Eigen::Vector3d& o, const Eigen::Vector3d&
   const double len = radial.norm();
   h.normal = radial / len;
   h.point = s.centre_mm + s.radius_mm * h.normal;  // back onto the sphere (pbrt's reprojection)
-  // I / r, with one division: 1 / r and 0 / r are exactly what I / r holds.
-  h.dnormal_dpoint.diagonal().setConstant(1.0 / s.radius_mm);
+  h.umbilic_curvature_per_mm = 1.0 / s.radius_mm;  // the shape operator I / r
   h.error_mm = error_bound(h.point, inf_norm(s.centre_mm) + s.radius_mm);
   return h;
 }

@@ -105,6 +105,33 @@ TEST(Sphere, HitTIsTheNearestRootAboveTMinToTheBit) {
   EXPECT_GT(inside, 2000);
 }
 
+// A sphere's hit gives its shape operator I / R as the scalar 1 / R, and the
+// tracer's scaling of a differential by it gives exactly the values of the
+// 3 x 3 product it replaces (its other terms are zeros), negative values, tiny
+// and huge ones included.
+TEST(Sphere, UmbilicCurvatureScalesToTheBitsOfTheMatrix) {
+  const Sphere s{Vector3d(1, -2, 3), 7.3};
+  const auto h = intersect(s, Vector3d(0.4, 0.2, -50), Vector3d(0, 0, 1), 0.0);
+  ASSERT_TRUE(h);
+  ASSERT_TRUE(h->umbilic_curvature_per_mm);
+  EXPECT_EQ(*h->umbilic_curvature_per_mm, 1.0 / 7.3);
+  EXPECT_TRUE(h->dnormal_dpoint.isZero());
+  Eigen::Matrix3d as_matrix = Eigen::Matrix3d::Zero();
+  as_matrix.diagonal().setConstant(*h->umbilic_curvature_per_mm);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> mantissa(-1, 1);
+  std::uniform_int_distribution<int> exponent(-300, 300);
+  for (int trial = 0; trial < 2000; ++trial) {
+    Eigen::Matrix<double, 3, 2> dpoint;
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 3; ++i) dpoint(i, j) = std::ldexp(mantissa(rng), exponent(rng));
+    const Eigen::Matrix<double, 3, 2> product = as_matrix * dpoint;
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 3; ++i)
+        ASSERT_EQ(*h->umbilic_curvature_per_mm * dpoint(i, j), product(i, j)) << trial;
+  }
+}
+
 TEST(SpawnOrigin, NoSelfHitOnGrazingSphereHits) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
