@@ -21,11 +21,19 @@ struct Hit {
   // ray differentials use it to carry footprints through curved interfaces.
   Eigen::Matrix3d dnormal_dpoint = Eigen::Matrix3d::Zero();
   // Where the shape operator is a multiple of the identity (an umbilic point:
-  // every point of a sphere, I / r), that multiple in 1/mm, and dnormal_dpoint
-  // is left zero: the tracer scales the differentials by it instead of
-  // multiplying by a 3 x 3 matrix: the same values (the product's other terms
-  // are zeros; only a -0 input may come out -0 where the product gave +0).
+  // every point of a sphere, I / r), that multiple in 1/mm; dnormal_dpoint is
+  // then left zero: read the shape operator through dnormal().
   std::optional<double> umbilic_curvature_per_mm;
+
+  // The normal's change for a change dpoint of the point along the surface
+  // (each column one direction): the shape operator applied, as a scale where
+  // it is one (the same values as the 3 x 3 product, whose other terms are
+  // zeros, in a fraction of its arithmetic; only a -0 may stay -0 where the
+  // product gave +0).
+  Eigen::Matrix<double, 3, 2> dnormal(const Eigen::Matrix<double, 3, 2>& dpoint) const {
+    if (umbilic_curvature_per_mm) return *umbilic_curvature_per_mm * dpoint;
+    return dnormal_dpoint * dpoint;
+  }
 };
 
 // Relative error bound for hit points and spawned origins: 64 ulp of the

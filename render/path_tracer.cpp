@@ -351,19 +351,10 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
         ++result.counts.shading_fallbacks;
       }
     }
-    // dnormal_dpoint describes the normal the shape reports (the smooth one
+    // The shape operator describes the normal the shape reports (the smooth one
     // where there is one); a fallback to a flat face's normal has none.
     const bool fell_back = hit->shading_normal && normal != *hit->shading_normal;
-    Diff dnormal;
-    if (fell_back) {
-      dnormal.setZero();
-    } else if (hit->umbilic_curvature_per_mm) {
-      const double k = *hit->umbilic_curvature_per_mm;
-      for (int j = 0; j < 2; ++j)
-        for (int i = 0; i < 3; ++i) dnormal(i, j) = k * dpoint(i, j);
-    } else {
-      dnormal = hit->dnormal_dpoint * dpoint;
-    }
+    const Diff dnormal = fell_back ? Diff::Zero() : hit->dnormal(dpoint);
     const double ndn = b.direction.dot(normal);
 
     const Refraction split = refract_with_fresnel(b.direction, normal, n1, n2);
