@@ -568,6 +568,8 @@ void register_align_commands(CLI::App& app) {
   sens->add_option("--seed", o.seed, "Monte Carlo seed");
   sens->add_option("--threads", o.threads, "threads (0: all)");
   sens->callback([] { run_sensitivity(o); });
+
+  register_align_fit_command(align);
 }
 
 }  // namespace glasspiv

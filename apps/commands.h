@@ -18,5 +18,7 @@ void register_simulate_command(CLI::App& app);
 // Called by register_calib_commands on its `calib` group.
 void register_calib_detect_command(CLI::App& calib);
 void register_calib_next_command(CLI::App& calib);
+// Called by register_align_commands on its `align` group.
+void register_align_fit_command(CLI::App* align);
 
 }  // namespace glasspiv

@@ -185,6 +185,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
   result.subtrees.clear();
   result.deferred.clear();
   result.deferred_weight = 0;
+  result.solids_met.clear();
 
   // The camera ray is not spawned from a hit, so it gets its own guard: a
   // surface closer than this to the origin is not seen (an origin on a surface
@@ -312,6 +313,7 @@ void trace_ray(const TraceScene& scene, const SceneIndex& index, const CameraRay
     }
 
     const TraceSolid& solid = scene.solids[static_cast<std::size_t>(hit->shape_index)];
+    if (options.record_solids_met) result.solids_met.push_back(hit->shape_index);
     if (solid.material.kind == TraceMaterial::Kind::opaque) {
       OpaqueHit oh;
       oh.solid_index = hit->shape_index;

@@ -89,6 +89,9 @@ struct TraceOptions {
   // traced. An approximation (bench/RESULTS.md tables its error). 1: every
   // anchor traced.
   int reflection_grid_levels = 1;
+  // Record the solid of every surface event in TraceResult::solids_met (the
+  // model fit re-traces only the pixels whose paths meet the part it moves).
+  bool record_solids_met = false;
 };
 
 // Whether build_transport_map uses the reflection grid: g > 1 and something
@@ -185,6 +188,9 @@ struct TraceResult {
   std::vector<ReflectedSubtree> subtrees;  // spawned off the refracted chain, in order
   std::vector<std::uint64_t> deferred;     // ids of the DeferredSubtrees met, in order
   double deferred_weight = 0;              // their weight
+  // With TraceOptions::record_solids_met: the solid index of every surface
+  // event (and opaque end), in the order traced, repeats kept; else empty.
+  std::vector<int> solids_met;
 
   // Whether the ray met any solid (a segment after the first, or an opaque end).
   bool met_solid() const { return counts.branches_traced > 1 || !opaque_hits.empty(); }

@@ -6,8 +6,9 @@
 
 namespace glasspiv {
 
-SheetTexture::SheetTexture(const float* values, int rows, int cols, double mm_per_texel)
-    : mm_per_texel_(mm_per_texel) {
+SheetTexture::SheetTexture(const float* values, int rows, int cols, double mm_per_texel,
+                           const Eigen::Vector2d& centre_st_mm)
+    : mm_per_texel_(mm_per_texel), centre_st_mm_(centre_st_mm) {
   if (rows < 1 || cols < 1 || !values) throw std::invalid_argument("SheetTexture: empty picture");
   if (!(mm_per_texel > 0) || !std::isfinite(mm_per_texel))
     throw std::invalid_argument("SheetTexture: mm_per_texel must be positive");
@@ -51,8 +52,8 @@ double SheetTexture::bilinear(int level, double x, double y) const {
 }
 
 float SheetTexture::at(double s_mm, double t_mm) const {
-  const double x = s_mm / mm_per_texel_ + 0.5 * (cols_[0] - 1);
-  const double y = -t_mm / mm_per_texel_ + 0.5 * (rows_[0] - 1);
+  const double x = (s_mm - centre_st_mm_.x()) / mm_per_texel_ + 0.5 * (cols_[0] - 1);
+  const double y = -(t_mm - centre_st_mm_.y()) / mm_per_texel_ + 0.5 * (rows_[0] - 1);
   return static_cast<float>(bilinear(0, x, y));
 }
 
@@ -70,8 +71,8 @@ float SheetTexture::average(double s_mm, double t_mm, const Eigen::Matrix2d& dst
   a *= scale;
   b *= scale;
   // Centre in this level's texel coordinates: level-L texel centre i covers level-0 texels [i 2^L, (i+1) 2^L).
-  const double x0 = (s_mm / mm_per_texel_ + 0.5 * (cols_[0] - 1) + 0.5) * scale - 0.5;
-  const double y0 = (-t_mm / mm_per_texel_ + 0.5 * (rows_[0] - 1) + 0.5) * scale - 0.5;
+  const double x0 = ((s_mm - centre_st_mm_.x()) / mm_per_texel_ + 0.5 * (cols_[0] - 1) + 0.5) * scale - 0.5;
+  const double y0 = (-(t_mm - centre_st_mm_.y()) / mm_per_texel_ + 0.5 * (rows_[0] - 1) + 0.5) * scale - 0.5;
   const int na = std::clamp(static_cast<int>(std::ceil(a.norm())), 1, kMaxTapsPerAxis);
   const int nb = std::clamp(static_cast<int>(std::ceil(b.norm())), 1, kMaxTapsPerAxis);
   if (na == 1 && nb == 1) return static_cast<float>(bilinear(level, x0, y0));

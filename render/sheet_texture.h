@@ -5,7 +5,7 @@
 // near a sphere's rim) average instead of aliasing and magnified ones
 // interpolate. No I/O.
 //
-// Placement: centred on the sheet origin, mm_per_texel per texel; the column
+// Placement: centred on the sheet origin (or on centre_st_mm), mm_per_texel per texel; the column
 // grows with s and the row with -t (t is "up"), so an image file looks upright
 // when the sheet's t axis is up. Outside the picture the sheet is dark (0).
 //
@@ -24,7 +24,10 @@ class SheetTexture {
 
   // values: row-major rows x cols (copied). Throws std::invalid_argument for an
   // empty picture or mm_per_texel <= 0.
-  SheetTexture(const float* values, int rows, int cols, double mm_per_texel);
+  // centre_st_mm: where on the sheet the picture's centre lies (default the
+  // sheet origin).
+  SheetTexture(const float* values, int rows, int cols, double mm_per_texel,
+               const Eigen::Vector2d& centre_st_mm = Eigen::Vector2d::Zero());
 
   int rows() const { return rows_[0]; }
   int cols() const { return cols_[0]; }
@@ -42,6 +45,7 @@ class SheetTexture {
   std::vector<std::vector<float>> levels_;
   std::vector<int> rows_, cols_;
   double mm_per_texel_;
+  Eigen::Vector2d centre_st_mm_;
 };
 
 }  // namespace glasspiv

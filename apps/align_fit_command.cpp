@@ -1,0 +1,211 @@
+// glasspiv align fit: the model fitted part by part to photos of a plate in
+// the sheet plane (align/model_fit.h). Thin: parse, call align/, report.
+// See docs/alignment.md, "Model fit".
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "align/fitted_scene.h"
+#include "align/model_fit.h"
+#include "align/plate_picture.h"
+#include "apps/cli_checks.h"
+#include "apps/cli_files.h"
+#include "apps/commands.h"
+#include "render/scene_yaml.h"
+#include "render/trace_scene_builder.h"
+#include "targets/target_yaml.h"
+#include "util/atomic_file.h"
+#include "util/image_file.h"
+#include "util/input_error.h"
+#include "util/progress_bar.h"
+
+namespace glasspiv {
+namespace {
+
+struct FitOptions {
+  std::string scene, plate, output, json, camera;
+  std::vector<std::string> photos, camera_photos;
+  std::vector<int> levels = {4, 2, 1};
+  std::vector<std::string> fix;
+  bool fit_diameters = false, fit_focal = false;
+  ModelFitTolerances tol;
+  double texel_mm = 0.05;
+  double min_explained = 0.5;
+  int iterations = ModelFitOptions{}.max_iterations;
+  int threads = 0;
+};
+
+int camera_index(const Scene& scene, const std::string& name, const std::string& field) {
+  if (name.empty()) {
+    if (scene.cameras.empty()) throw InputError(scene.source, "cameras", "the scene has no camera");
+    return 0;
+  }
+  for (std::size_t i = 0; i < scene.cameras.size(); ++i)
+    if (scene.cameras[i].name == name) return static_cast<int>(i);
+  throw InputError(scene.source, field, fmt::format("no camera named '{}' in the scene", name));
+}
+
+cv::Mat read_photo(const std::string& path, const CameraModel& camera, const std::string& camera_name) {
+  GrayImage img = read_gray_image(path);
+  if (img.width != camera.width_px() || img.height != camera.height_px())
+    throw InputError(path, "size", fmt::format("is {}x{} px, camera '{}' is {}x{} px", img.width, img.height,
+                                               camera_name, camera.width_px(), camera.height_px()));
+  return cv::Mat(img.height, img.width, CV_32F, img.values.data()).clone();
+}
+
+ModelFitFreedom freedom_of(const FitOptions& o) {
+  ModelFitFreedom f;
+  f.sphere_diameters = o.fit_diameters;
+  f.camera_focal = o.fit_focal;
+  for (const std::string& part : o.fix) {
+    if (part == "camera") f.camera_pose = false;
+    else if (part == "sheet") f.sheet_pose = false;
+    else if (part == "spheres") f.sphere_centres = false;
+    else if (part == "index") f.refractive_index = false;
+    else throw InputError("", "--fix", fmt::format("unknown part '{}' (camera, sheet, spheres, index)", part));
+  }
+  return f;
+}
+
+void run_fit(const FitOptions& o) {
+  const Scene scene = read_scene(o.scene);
+  // The photos: PHOTO for --camera, CAM=FILE for the others.
+  std::vector<std::pair<int, std::string>> views;
+  for (const std::string& p : o.photos) views.emplace_back(camera_index(scene, o.camera, "--camera"), p);
+  for (const std::string& cp : o.camera_photos) {
+    const std::size_t eq = cp.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == cp.size())
+      throw InputError("", "--photo", fmt::format("expected CAMERA=FILE, got '{}'", cp));
+    views.emplace_back(camera_index(scene, cp.substr(0, eq), "--photo"), cp.substr(eq + 1));
+  }
+  if (views.empty()) throw InputError("", "PHOTO", "give a plate photo (PHOTO or --photo CAMERA=FILE)");
+  std::map<int, int> per_camera;
+  for (const auto& v : views)
+    if (++per_camera[v.first] > 1)
+      throw InputError(v.second, "PHOTO",
+                       fmt::format("a second photo of camera '{}': give one plate photo per camera",
+                                   scene.cameras[static_cast<std::size_t>(v.first)].name));
+  std::vector<std::string> inputs = scene_input_files(scene);
+  inputs.push_back(o.plate);
+  for (const auto& v : views) inputs.push_back(v.second);
+  std::vector<OutputFile> outputs{{o.output, "-o"}};
+  if (!o.json.empty()) outputs.push_back({o.json, "--json"});
+  check_outputs(inputs, outputs);
+
+  const TargetSpec spec = read_target_yaml(o.plate);
+  const PlateTexture plate = naming_file(o.plate, [&] { return plate_texture(spec, o.texel_mm); });
+  const TraceScene drawing = naming_file(o.scene, [&] { return build_trace_scene(scene); });
+  std::vector<PlatePhoto> photos;
+  for (const auto& [cam, path] : views) {
+    const SceneCamera& sc = scene.cameras[static_cast<std::size_t>(cam)];
+    photos.push_back({sc.name, sc.camera.model, *sc.camera.camera_from_world, read_photo(path, sc.camera.model, sc.name)});
+  }
+
+  ModelFitOptions options;
+  options.binning_levels = o.levels;
+  options.max_iterations = o.iterations;
+  options.threads = o.threads;
+  const int steps = static_cast<int>(o.levels.size()) * o.iterations;
+  ProgressBar bar("fit", static_cast<std::size_t>(steps));
+  options.progress = [&](int level, int iteration, int) { bar.set_done(static_cast<std::size_t>(level * o.iterations + iteration + 1)); };
+  const ModelFitResult fit = naming_file(o.scene, [&] {
+    return fit_model(drawing, photos, plate.picture(), freedom_of(o), o.tol, options);
+  });
+  bar.finish();
+
+  for (const ModelFitLevel& l : fit.levels)
+    std::printf("level %d: %d px, residual %.4g -> %.4g (photo sd %.4g), %d steps, %ld rays, %.1f s\n", l.binning,
+                l.pixels, l.rms_before, l.rms_after, l.photo_sd, l.iterations, l.traced_rays, l.seconds);
+  std::printf("residual at full resolution: drawing %.4g, fitted %.4g; the model explains %.1f %% of the photo's "
+              "variance\n",
+              fit.residual_rms_start, fit.residual_rms_end, 100 * fit.explained_variance);
+  if (fit.explained_variance < o.min_explained)
+    throw InputError(views.front().second, "PHOTO",
+                     fmt::format("does not show this plate through this model: the fitted model explains {:.1f} % of "
+                                 "its variance (at least {:.0f} % expected; residual {:.4g}, photo sd {:.4g}); "
+                                 "nothing written",
+                                 100 * fit.explained_variance, 100 * o.min_explained, fit.residual_rms_end,
+                                 fit.levels.back().photo_sd));
+  std::printf("%-34s %14s %14s %12s %12s\n", "parameter", "drawing", "fitted", "1-sigma", "tolerance");
+  for (const FittedParameter& p : fit.parameters)
+    std::printf("%-34s %14.6f %14.6f %12.3g %12.3g%s\n", p.name.c_str(), p.drawing, p.fitted, p.sigma, p.prior_sigma,
+                p.determined() ? "" : "  (not determined by the photos: held by the drawing's tolerance)");
+  const std::vector<SphereSolid> spheres = scene.all_spheres();
+  for (int s : fit.unseen_spheres)
+    std::printf("no pixel looks through %s: left at the drawing\n",
+                spheres[static_cast<std::size_t>(s)].field.c_str());
+  for (const auto& [a, b] : fit.inseparable) std::printf("the photos cannot tell %s from %s (|correlation| > 0.95)\n", a.c_str(), b.c_str());
+
+  std::vector<FittedCamera> cams;
+  for (std::size_t i = 0; i < views.size(); ++i)
+    cams.push_back({views[i].first, fit.camera_from_world[i], fit.focal_scale[i]});
+  write_scene(o.output, fitted_scene(scene, fit.scene, cams));
+  std::printf("wrote %s\n", o.output.c_str());
+  if (!o.json.empty()) {
+    nlohmann::json j;
+    j["residual_rms_drawing"] = fit.residual_rms_start;
+    j["residual_rms_fitted"] = fit.residual_rms_end;
+    j["explained_variance"] = fit.explained_variance;
+    j["seconds"] = fit.seconds;
+    for (const FittedParameter& p : fit.parameters)
+      j["parameters"].push_back({{"name", p.name}, {"drawing", p.drawing}, {"fitted", p.fitted}, {"sigma", p.sigma},
+                                 {"tolerance", p.prior_sigma}, {"determined", p.determined()}});
+    for (int s : fit.unseen_spheres) j["unseen_spheres"].push_back(spheres[static_cast<std::size_t>(s)].field);
+    for (const auto& [a, b] : fit.inseparable) j["inseparable"].push_back({a, b});
+    for (const ModelFitLevel& l : fit.levels)
+      j["levels"].push_back({{"binning", l.binning}, {"pixels", l.pixels}, {"residual_before", l.rms_before},
+                             {"residual_after", l.rms_after}, {"photo_sd", l.photo_sd}, {"iterations", l.iterations},
+                             {"rays", l.traced_rays}, {"seconds", l.seconds}});
+    std::vector<std::vector<double>> cov(static_cast<std::size_t>(fit.covariance.rows()));
+    for (Eigen::Index a = 0; a < fit.covariance.rows(); ++a)
+      for (Eigen::Index b = 0; b < fit.covariance.cols(); ++b) cov[static_cast<std::size_t>(a)].push_back(fit.covariance(a, b));
+    j["covariance"] = cov;
+    write_file_atomically(o.json, j.dump(2) + "\n");
+    std::printf("wrote %s\n", o.json.c_str());
+  }
+}
+
+}  // namespace
+
+void register_align_fit_command(CLI::App* align) {
+  static FitOptions o;
+  CLI::App* fit = align->add_subcommand(
+      "fit", "fit the model to photos of a plate in the sheet plane: each glass sphere's centre, the glass index, the "
+             "sheet's (plate's) pose and the camera poses, photometric, coarse to fine; writes the fitted scene");
+  fit->add_option("SCENE", o.scene, "the drawing: scene file (docs/scene.md)")->required()->check(CLI::ExistingFile);
+  fit->add_option("PHOTO", o.photos, "the plate photo taken by --camera (8/16-bit TIFF, PNG, ...)")
+      ->check(CLI::ExistingFile);
+  fit->add_option("--camera", o.camera, "the scene's camera that took PHOTO (default: the first)");
+  fit->add_option("--photo", o.camera_photos, "CAMERA=FILE: a plate photo of another camera (repeat for a rig)");
+  fit->add_option("--plate", o.plate, "the plate's target spec (docs/targets.md), lying in the sheet plane")
+      ->required()
+      ->check(CLI::ExistingFile);
+  fit->add_option("-o,--scene-out", o.output, "the fitted scene (YAML)")->required();
+  fit->add_option("--json", o.json, "also write every parameter, its 1-sigma and the covariance as JSON");
+  fit->add_option("--levels", o.levels, "binning factors, coarse to fine")->delimiter(',')->check(CLI::Range(1, 64));
+  fit->add_option("--fix", o.fix, "parts held at the drawing: camera, sheet, spheres, index")->delimiter(',');
+  fit->add_flag("--fit-diameters", o.fit_diameters, "also fit each sphere's diameter");
+  fit->add_flag("--fit-focal", o.fit_focal, "also fit one scale on each camera's focal length");
+  fit->add_option("--camera-mm", o.tol.camera_position_mm, "drawing tolerance (1-sigma) of a camera centre, mm")
+      ->check(CLI::PositiveNumber);
+  fit->add_option("--camera-deg", o.tol.camera_rotation_deg, "... of a camera's rotation, deg")->check(CLI::PositiveNumber);
+  fit->add_option("--sheet-mm", o.tol.sheet_position_mm, "... of the sheet's (plate's) position, mm")
+      ->check(CLI::PositiveNumber);
+  fit->add_option("--sheet-deg", o.tol.sheet_rotation_deg, "... of the sheet's rotation, deg")->check(CLI::PositiveNumber);
+  fit->add_option("--centre-mm", o.tol.sphere_centre_mm, "... of each sphere's centre, mm")->check(CLI::PositiveNumber);
+  fit->add_option("--diameter-mm", o.tol.sphere_diameter_mm, "... of each sphere's diameter, mm")
+      ->check(CLI::PositiveNumber);
+  fit->add_option("--index", o.tol.refractive_index, "... of the glass index")->check(CLI::PositiveNumber);
+  fit->add_option("--texel-mm", o.texel_mm, "the plate's picture resolution, mm per texel")->check(CLI::Range(1e-3, 10.0));
+  fit->add_option("--iterations", o.iterations, "Gauss-Newton steps per level at most")->check(CLI::Range(1, 200));
+  fit->add_option("--min-explained", o.min_explained,
+                  "refuse a fit whose model explains less than this fraction of the photo's variance")
+      ->check(CLI::Range(0.0, 1.0));
+  fit->add_option("--threads", o.threads, "threads (0: all)");
+  fit->callback([] { run_fit(o); });
+}
+
+}  // namespace glasspiv
