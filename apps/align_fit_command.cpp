@@ -36,6 +36,7 @@ struct FitOptions {
   double min_explained = 0.5;
   int iterations = ModelFitOptions{}.max_iterations;
   int threads = 0;
+  int binning = 1;
 };
 
 int camera_index(const Scene& scene, const std::string& name, const std::string& field) {
@@ -101,7 +102,8 @@ void run_fit(const FitOptions& o) {
   std::vector<PlatePhoto> photos;
   for (const auto& [cam, path] : views) {
     const SceneCamera& sc = scene.cameras[static_cast<std::size_t>(cam)];
-    photos.push_back({sc.name, sc.camera.model, *sc.camera.camera_from_world, read_photo(path, sc.camera.model, sc.name)});
+    const CameraModel model = o.binning > 1 ? binned(sc.camera.model, o.binning) : sc.camera.model;
+    photos.push_back({sc.name, model, *sc.camera.camera_from_world, read_photo(path, model, sc.name)});
   }
 
   ModelFitOptions options;
@@ -142,7 +144,15 @@ void run_fit(const FitOptions& o) {
   std::vector<FittedCamera> cams;
   for (std::size_t i = 0; i < views.size(); ++i)
     cams.push_back({views[i].first, fit.camera_from_world[i], fit.focal_scale[i]});
-  write_scene(o.output, fitted_scene(scene, fit.scene, cams));
+  const Scene fitted = fitted_scene(scene, fit.scene, cams);
+  // A fitted model the scene format refuses (two balls fitted into each other
+  // at a contact) is reported, not written as a file that cannot be read back.
+  try {
+    validate(fitted);
+  } catch (const InputError& e) {
+    throw InputError(o.output, e.field(), "the fitted model is not a valid scene (" + e.problem() + "); nothing written");
+  }
+  write_scene(o.output, fitted);
   std::printf("wrote %s\n", o.output.c_str());
   if (!o.json.empty()) {
     nlohmann::json j;
@@ -205,6 +215,8 @@ void register_align_fit_command(CLI::App* align) {
                   "refuse a fit whose model explains less than this fraction of the photo's variance")
       ->check(CLI::Range(0.0, 1.0));
   fit->add_option("--threads", o.threads, "threads (0: all)");
+  fit->add_option("--binning", o.binning, "the cameras read out K x K binned (photos of that size; quick runs)")
+      ->check(CLI::Range(1, 64));
   fit->callback([] { run_fit(o); });
 }
 
