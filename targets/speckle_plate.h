@@ -7,10 +7,12 @@
 // solves speckle_expected_fill(rho) = fill, so that the expected inked
 // fraction (the dots overlap where they meet) is `fill`. One dot per cell, its
 // centre uniform over the cell (narrowed at the plate's edge so that every dot
-// lies inside the plate): a uniform jitter over the whole cell leaves the
-// pattern no periodic component (the jitter's characteristic function vanishes
-// at every reciprocal lattice vector), while one dot per cell keeps it free of
-// large voids and clumps.
+// lies inside the plate): a uniform jitter over the whole cell leaves the dot
+// centres no periodic component (the jitter's characteristic function vanishes
+// at every reciprocal lattice vector), while one dot per cell keeps the pattern
+// free of large voids and clumps. Overlapping dots, more frequent near the
+// cells' edges, leave the ink a faint modulation at the grid frequency (0.02
+// of full ink on the example; docs/targets.md).
 #include <vector>
 
 #include <Eigen/Core>
