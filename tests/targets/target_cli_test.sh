@@ -121,6 +121,9 @@ expect 2 "$G" calib detect a.png --target "$S" -o obs.yaml
 has err.txt "speckle_150x120_0.5mm.yaml: field 'kind': a speckle plate has no corners"
 expect 2 "$G" calib intrinsics a.png --target "$S" -o cam.yaml
 has err.txt "speckle_150x120_0.5mm.yaml: field 'kind': a speckle plate has no corners"
+printf 'not read\n' >unread_obs.yaml
+expect 2 "$G" calib next unread_obs.yaml --target "$S"
+has err.txt "field 'kind': a speckle plate has no corners to detect, and calib next needs corners"
 printf 'glasspiv_target: 1\nkind: speckle\nplate_size_mm: [50, 40]\ndot_diameter_mm: 1\nfill: 0.4\nseed: -1\n' >neg_seed.yaml
 expect 2 "$G" target show neg_seed.yaml
 has err.txt "neg_seed.yaml: field 'seed'"
