@@ -256,6 +256,8 @@ class DiscUnionCoverage {
         neighbour_start_.push_back(neighbours_.size());
       }
     stamp_.assign(centres_.size(), 0);
+    max_depth_ = max_depth(radius_);
+    lists_.resize(static_cast<std::size_t>(max_depth_) + 2);
   }
 
   // The ink of pixel (i, j), and the bound on its error added to `error`.
@@ -269,7 +271,7 @@ class DiscUnionCoverage {
     const int r0 = std::max(0, static_cast<int>(std::floor((y0 - r_mm) / grid_.cell_height_mm)));
     const int r1 = std::min(grid_.rows - 1, static_cast<int>(std::floor((y1 + r_mm) / grid_.cell_height_mm)));
     if (c1 < c0 || r1 < r0) return 0;
-    std::vector<int>& candidates = lists_[kMaxDepth + 1];
+    std::vector<int>& candidates = lists_.back();
     candidates.clear();
     for (int r = r0; r <= r1; ++r)
       for (int c = c0; c <= c1; ++c) candidates.push_back(r * grid_.cols + c);
@@ -277,7 +279,14 @@ class DiscUnionCoverage {
   }
 
  private:
-  static constexpr int kMaxDepth = 10;
+  // Pieces down to 2^-10 of the smaller of a pixel and a dot's radius: where a
+  // pixel holds many dots, its unresolved pieces (near the crossings of
+  // overlapping dots' edges) stay as small against each dot as they would be
+  // at a pixel per radius, so the error bound does not grow with the dots per
+  // pixel.
+  static int max_depth(double radius_px) {
+    return 10 + (radius_px < 1 ? static_cast<int>(std::ceil(std::log2(1 / radius_px))) : 0);
+  }
 
   // Ink of the square [x0, x0 + side] x [y0, y0 + side] from the discs `ids`.
   double square(double x0, double y0, double side, const std::vector<int>& ids, int depth, double& error) {
@@ -314,7 +323,7 @@ class DiscUnionCoverage {
     }
     if (!overlapping) return std::min(sum, side * side);
     const double hi = std::min(sum, side * side);
-    if (depth == kMaxDepth || hi - largest <= 1e-12) {
+    if (depth == max_depth_ || hi - largest <= 1e-12) {
       error += (hi - largest) / 2;
       return (hi + largest) / 2;
     }
@@ -331,7 +340,8 @@ class DiscUnionCoverage {
   std::vector<int> neighbours_;
   std::vector<std::uint64_t> stamp_;
   std::uint64_t token_ = 0;
-  std::vector<int> lists_[kMaxDepth + 2];  // per depth, and the pixel's candidates
+  int max_depth_ = 0;
+  std::vector<std::vector<int>> lists_;  // per depth, and last the pixel's candidates
 };
 
 }  // namespace

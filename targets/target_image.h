@@ -68,7 +68,8 @@ TargetRender render_target(const TargetSpec& spec, double px_per_mm, double marg
 // Rectangles are exact (to float rounding). Discs (which may overlap) are
 // exact where a pixel meets one disc, or several that do not overlap each other
 // there; where overlapping discs both cross a pixel's boundary, the pixel is
-// split into quarters, down to 2^-10 of a pixel, and an unresolved piece counts
+// split into quarters, down to 2^-10 of a pixel (or of a disc's radius where
+// that is smaller than a pixel), and an unresolved piece counts
 // the middle of its bounds [largest disc part, min(sum of disc parts, area)].
 // `max_error`, if given, receives the largest bound on a pixel's error (half
 // the bounds' widths, summed over the pixel's unresolved pieces), in fractions

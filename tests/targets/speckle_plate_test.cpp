@@ -216,6 +216,26 @@ TEST(Speckle, MeasuredFillOfTheExample) {
   EXPECT_EQ(hi, 1) << "pixels wholly inside a dot";
 }
 
+// Many dots to a pixel: the error bound stays small, and the ink is the same
+// as at a fine resolution (the fill is a sum of areas, whatever the pixels).
+TEST(Speckle, CoarsePixelsHoldingManyDots) {
+  const TargetSpec s = example();
+  double fine_error = 1;
+  const cv::Mat fine = target_ink_coverage(s, 8, 0, &fine_error);
+  const double fine_ink = cv::sum(fine)[0] / (8.0 * 8.0);  // mm^2
+  for (const double px_per_mm : {1.0, 0.25}) {  // 2.2 and 35 dots per pixel
+    double max_error = 1;
+    const cv::Mat ink = target_ink_coverage(s, px_per_mm, 0, &max_error);
+    const double ink_mm2 = cv::sum(ink)[0] / (px_per_mm * px_per_mm);
+    std::printf("%g px/mm: largest error bound %.2g, ink %.2f mm^2 (%.2f at 8 px/mm)\n", px_per_mm, max_error, ink_mm2,
+                fine_ink);
+    EXPECT_LT(max_error, 1e-4) << px_per_mm;
+    // Summed over the plate's 18,000 mm^2, the two rasters' per-pixel bounds
+    // (fractions of a pixel's area) allow 18,000 (1e-4 + fine_error) mm^2.
+    EXPECT_NEAR(ink_mm2, fine_ink, 18000 * (1e-4 + fine_error)) << px_per_mm;
+  }
+}
+
 // Independent reference: 64 x 64 point samples per pixel, each in or out of
 // the union of the dots by distance alone. A sample's sub-square that no disc
 // boundary crosses is wholly in or out, so the sampled value is exact there;
