@@ -427,6 +427,7 @@ cv::Mat target_ink_coverage(const TargetSpec& spec, double px_per_mm, double mar
     }
   } else {
     add_rect_ink(target_black_rects(spec), px_per_mm, margin_mm, ink);
+    ink = cv::min(ink, 1.0);  // the rectangles do not overlap: only float rounding reaches past 1
   }
   if (max_error != nullptr) *max_error = worst;
   return ink;
