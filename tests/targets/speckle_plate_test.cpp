@@ -242,8 +242,10 @@ TEST(Speckle, CoarsePixelsHoldingManyDots) {
 // each crossed sub-square can be off by at most 1/4096 of the pixel. Per
 // pixel, |coverage - sampled| <= crossed / 4096 + the coverage's own bound.
 TEST(Speckle, CoverageAgainstPointSampling) {
-  for (const TargetSpec& s : {small_plate(0.4, 11), small_plate(0.7, 12), small_plate(0.1, 13)}) {
-    const double px_per_mm = 2.5, margin = 1;
+  // 2.5 px/mm: dots 3.75 px across; 0.7 px/mm: about a pixel, several to a pixel.
+  for (const auto& [s, px_per_mm] : {std::pair{small_plate(0.4, 11), 2.5}, std::pair{small_plate(0.7, 12), 2.5},
+                                     std::pair{small_plate(0.1, 13), 2.5}, std::pair{small_plate(0.7, 14), 0.7}}) {
+    const double margin = 1;
     double max_error = 1;
     const cv::Mat ink = target_ink_coverage(s, px_per_mm, margin, &max_error);
     EXPECT_LT(max_error, 1e-4);
@@ -273,9 +275,9 @@ TEST(Speckle, CoverageAgainstPointSampling) {
         worst_excess = std::max(worst_excess, diff - (static_cast<double>(crossed) / (n * n) + max_error + 1e-6));
         sum_abs += diff;
       }
-    EXPECT_LE(worst_excess, 0) << "fill " << s.fill;
+    EXPECT_LE(worst_excess, 0) << "fill " << s.fill << ", " << px_per_mm << " px/mm";
     // The sampling errors are of both signs: their mean stays far below the bounds.
-    EXPECT_LT(sum_abs / (ink.rows * ink.cols), 2e-3) << "fill " << s.fill;
+    EXPECT_LT(sum_abs / (ink.rows * ink.cols), 2e-3) << "fill " << s.fill << ", " << px_per_mm << " px/mm";
   }
 }
 
