@@ -60,6 +60,7 @@ std::vector<SceneFiducial> scene_fiducials(const Scene& scene) {
     f.field = rect.field;
     f.target_file = rect.texture;
     f.spec = read_target_yaml(rect.texture);
+    if (f.spec.kind == TargetKind::speckle) continue;  // a texture without corners, not a fiducial
     f.world_from_board = world_from_board_on_rectangle(rect, f.spec, rectangle_target_texture(f.spec), scene.source);
     f.corners_board = board_corners(f.spec);
     out.push_back(std::move(f));

@@ -48,8 +48,10 @@ struct SceneFiducial {
   Eigen::Vector3d corner_world_mm(const BoardCorner& corner) const { return world_from_board.apply(corner.point_mm); }
 };
 
-// Every rectangle of the scene that carries a target spec, in scene order; the
-// specs are read and validated (InputError naming the spec file). Two single
+// Every rectangle of the scene that carries a target spec with corners, in
+// scene order; the specs are read and validated (InputError naming the spec
+// file). A speckle plate (TargetKind::speckle) has no corners: its rectangle is
+// drawn (rectangle_target_texture) but is no fiducial. Two single
 // markers of one dictionary with the same id, or a marker id that a board of the
 // same dictionary also uses, are an InputError naming both fields: a detection
 // could not tell them apart.

@@ -137,7 +137,9 @@ nlohmann::json pose_one_camera(const AlignOptions& o, const std::string& camera,
   const PreparedScene ps = prepare_scene(o.scene, camera, o.binning, SceneUse::setup_only);
   const std::vector<SceneFiducial> fiducials = scene_fiducials(ps.scene);
   if (fiducials.empty())
-    throw InputError(o.scene, "solids", "the scene has no fiducials (rectangles whose texture is a target spec)");
+    throw InputError(o.scene, "solids",
+                     "the scene has no fiducials (rectangles whose texture is a target spec with corners; a speckle "
+                     "plate has none)");
   const CameraModel& model = ps.camera().model;
   std::vector<FiducialCorner> corners;
   for (const std::string& photo : photos) {

@@ -245,6 +245,7 @@ void run_intrinsics(const IntrinsicsOptions& o) {
     observations = read_observations(o.inputs[0]);
   } else {
     const TargetSpec spec = read_target_yaml(o.target);
+    require_target_corners(spec, o.target, "an intrinsic calibration");
     PhotoDetectionOptions detection;
     detection.overlay_dir = o.overlay_dir;
     observations = detect_in_photos(photos, spec, o.target, detection);

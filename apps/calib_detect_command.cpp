@@ -24,6 +24,7 @@ struct DetectCommandOptions {
 
 void run_detect(const DetectCommandOptions& o) {
   const TargetSpec spec = read_target_yaml(o.target);
+  require_target_corners(spec, o.target, "calib detect");
   // Refuse what cannot be written before the work.
   observations_format_for_path(o.output);
   int grid_w = 0, grid_h = 0;

@@ -125,6 +125,7 @@ void run_next(const NextCommandOptions& o) {
                       {{dir, "-o"}, {html_path, "-o"}, {json_path, "-o"}, {placement_path, "-o"},
                        {before_path, "-o"}, {after_path, "-o"}});
   const TargetSpec spec = read_target_yaml(o.target);
+  require_target_corners(spec, o.target, "calib next");
   const Observations observations = read_observations(o.observations);
   BoardLayout board;
   for (const BoardCorner& c : board_corners(spec)) board.corners_mm.push_back(c.point_mm);

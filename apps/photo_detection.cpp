@@ -109,6 +109,7 @@ void check_calib_outputs(const std::vector<std::string>& inputs, const std::vect
 
 Observations detect_in_photos(const std::vector<std::string>& photos, const TargetSpec& spec,
                               const std::string& target_path, const PhotoDetectionOptions& options) {
+  require_target_corners(spec, target_path, "corner detection");
   DetectOptions detect_options;
   detect_options.require_layout_evidence = !options.lenient_layout;
   const TargetDetector detector(spec, detect_options);

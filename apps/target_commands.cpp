@@ -8,6 +8,7 @@
 
 #include "apps/cli_files.h"
 #include "apps/commands.h"
+#include "targets/speckle_plate.h"
 #include "targets/target_image.h"
 #include "targets/target_pdf.h"
 #include "targets/target_spec.h"
@@ -62,8 +63,9 @@ void run_print(const PrintOptions& o) {
     const Eigen::Vector2d board = board_size_mm(spec);
     const double margin = default_margin_mm(spec);
     std::printf("wrote %s at %g dpi (%.1f x %.1f mm with its margin; the resolution is stored in the PNG, which has "
-                "no caption or scale bar: measure a square after printing)\n",
-                o.png.c_str(), o.dpi, board.x() + 2 * margin, board.y() + 2 * margin);
+                "no caption or scale bar: measure %s after printing)\n",
+                o.png.c_str(), o.dpi, board.x() + 2 * margin, board.y() + 2 * margin,
+                spec.kind == TargetKind::speckle ? "the plate" : "a square");
   }
 }
 
@@ -76,6 +78,15 @@ void run_show(const std::string& path) {
   std::printf("  %s\n", describe_target(unnamed).c_str());
   std::printf("  pattern %g x %g mm (without margin); printed with a %g mm white margin\n", size.x(), size.y(),
               default_margin_mm(spec));
+  if (spec.kind == TargetKind::speckle) {
+    const SpeckleGrid g = speckle_grid(spec);
+    std::printf("  %zu dots of %g mm, one in each cell of a %d x %d grid (cells %.17g x %.17g mm; pitch %.17g mm "
+                "for fill %g, diameter / pitch %.17g)\n",
+                g.dot_count(), spec.dot_diameter_mm, g.cols, g.rows, g.cell_width_mm, g.cell_height_mm, g.pitch_mm,
+                spec.fill, g.diameter_over_pitch);
+    std::printf("  no corners: a texture for photometric fitting, not for calib detect or align fiducials\n");
+    return;
+  }
   const std::size_t corners = board_corner_count(spec);
   int w = 0, h = 0;
   double spacing = 0;

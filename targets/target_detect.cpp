@@ -389,6 +389,7 @@ struct TargetDetector::Impl {
 
 TargetDetector::TargetDetector(const TargetSpec& spec, DetectOptions options) : impl_(std::make_unique<Impl>()) {
   validate_target(spec);
+  require_target_corners(spec, "", "a TargetDetector");
   impl_->spec = spec;
   impl_->options = options;
   impl_->corners = board_corners(spec);
@@ -426,6 +427,7 @@ DetectionResult TargetDetector::detect(const cv::Mat& gray, const std::string& s
     case TargetKind::aprilgrid: result = impl_->detect_aprilgrid(gray, std::move(result)); break;
     case TargetKind::aruco_marker:
     case TargetKind::apriltag: result = impl_->detect_single_marker(gray, source, std::move(result)); break;
+    case TargetKind::speckle: break;  // refused by the constructor
   }
   sort_by_id(result.view.corners);
   return result;

@@ -3,6 +3,7 @@
 #include <cairo-pdf.h>
 #include <cairo.h>
 
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -28,6 +29,19 @@ void check(cairo_status_t status, const char* what) {
 // without the hairline seams separate fills leave in anti-aliasing viewers.
 void fill_rects(cairo_t* cr, const std::vector<BoardRect>& rects) {
   for (const BoardRect& r : rects) cairo_rectangle(cr, r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0);
+  cairo_fill(cr);
+}
+
+// One path of circles (arcs), filled by the non-zero rule: where dots overlap
+// their union is black.
+void fill_discs(cairo_t* cr, const std::vector<BoardDisc>& discs) {
+  if (discs.empty()) return;
+  for (const BoardDisc& d : discs) {
+    cairo_new_sub_path(cr);
+    cairo_arc(cr, d.x, d.y, d.radius, 0, 6.283185307179586);  // a full turn
+    cairo_close_path(cr);
+  }
+  cairo_set_fill_rule(cr, CAIRO_FILL_RULE_WINDING);
   cairo_fill(cr);
 }
 
@@ -59,6 +73,7 @@ std::string target_pdf(const TargetSpec& spec, double margin_mm) {
       cairo_paint(cr);
       cairo_set_source_rgb(cr, 0, 0, 0);
       fill_rects(cr, page.pattern);
+      fill_discs(cr, page.discs);
       fill_rects(cr, page.scale_bar);
       cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
       cairo_set_font_size(cr, page.font_size_mm);

@@ -2,7 +2,7 @@
 // A target as a PDF at exact scale (cairo's PDF surface): the page of
 // target_page() (pattern, margin, caption and 100 mm scale bar), one page of
 // target_svg_size_mm() mm, i.e. mm * 72 / 25.4 points, drawn as vector fills
-// and text. See docs/targets.md.
+// and text (a speckle plate's dots as circular arcs). See docs/targets.md.
 #include <string>
 
 #include "targets/target_spec.h"

@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <opencv2/aruco/dictionary.hpp>
 
+#include "targets/speckle_plate.h"
 #include "util/input_error.h"
 
 namespace glasspiv {
@@ -111,6 +112,49 @@ void check_length(double value, const std::string& field, const std::string& fil
     throw InputError(file, field, fmt::format("{} mm is more than {} mm; the unit is mm", value, kMaxTargetLengthMm));
 }
 
+// Any kind but speckle: the plate fields stay zero.
+void refuse_speckle_fields(const TargetSpec& s, const std::string& file) {
+  const std::string problem = "applies to speckle plates only";
+  if (s.plate_size_mm != Eigen::Vector2d::Zero()) throw InputError(file, "plate_size_mm", problem);
+  if (s.dot_diameter_mm != 0) throw InputError(file, "dot_diameter_mm", problem);
+  if (s.fill != 0) throw InputError(file, "fill", problem);
+  if (s.seed != 0) throw InputError(file, "seed", problem);
+}
+
+void validate_speckle(const TargetSpec& s, const std::string& file) {
+  auto fail = [&](const std::string& field, const std::string& problem) { throw InputError(file, field, problem); };
+  const std::string none = "a speckle plate has no squares or markers";
+  if (s.squares_x != 0 || s.squares_y != 0) fail("squares", none);
+  if (s.square_size_mm != 0) fail("square_size_mm", none);
+  if (s.marker_size_mm != 0) fail("marker_size_mm", none);
+  if (!s.dictionary.empty()) fail("dictionary", none);
+  if (s.first_id != 0) fail("first_id", none);
+  if (s.charuco_layout != CharucoLayout::opencv) fail("charuco_layout", "applies to charuco boards only");
+  for (int k = 0; k < 2; ++k) {
+    const double side = s.plate_size_mm[k];
+    const std::string field = fmt::format("plate_size_mm[{}]", k);
+    check_length(side, field, file);
+    if (side > kMaxTargetPatternMm)
+      fail(field, fmt::format("{} mm is more than the {} mm across and down a target may have", side,
+                              kMaxTargetPatternMm));
+  }
+  check_length(s.dot_diameter_mm, "dot_diameter_mm", file);
+  if (!std::isfinite(s.fill) || !(s.fill > 0) || !(s.fill <= kMaxSpeckleFill))
+    fail("fill", fmt::format("{} is not in (0, {}]: the fraction of the plate inked", s.fill, kMaxSpeckleFill));
+  const double shortest = s.plate_size_mm.minCoeff();
+  if (shortest < kMinSpeckleDotsAcross * s.dot_diameter_mm)
+    fail("plate_size_mm", fmt::format("{:.6g} mm is less than {} dot diameters ({} mm) across", shortest,
+                                      kMinSpeckleDotsAcross, kMinSpeckleDotsAcross * s.dot_diameter_mm));
+  // The dot count, from the pitch before rounding to cells (no overflow).
+  const double pitch = s.dot_diameter_mm / speckle_diameter_over_pitch(s.fill);
+  const double dots = (s.plate_size_mm.x() / pitch + 0.5) * (s.plate_size_mm.y() / pitch + 0.5);
+  if (dots > kMaxSpeckleDots)
+    fail("dot_diameter_mm", fmt::format("{} mm dots at fill {} make about {:.3g} dots on a {} x {} mm plate, more "
+                                        "than the {:.3g} a plate may have",
+                                        s.dot_diameter_mm, s.fill, dots, s.plate_size_mm.x(), s.plate_size_mm.y(),
+                                        kMaxSpeckleDots));
+}
+
 void validate_single_marker(const TargetSpec& s, const std::string& file) {
   auto fail = [&](const std::string& field, const std::string& problem) { throw InputError(file, field, problem); };
   const bool aruco = s.kind == TargetKind::aruco_marker;
@@ -150,6 +194,7 @@ std::string target_kind_name(TargetKind kind) {
     case TargetKind::aprilgrid: return "aprilgrid";
     case TargetKind::aruco_marker: return "aruco_marker";
     case TargetKind::apriltag: return "apriltag";
+    case TargetKind::speckle: return "speckle";
   }
   return "?";
 }
@@ -208,6 +253,11 @@ std::string apriltag_family_names() {
 void validate_target(const TargetSpec& s, const std::string& file) {
   auto fail = [&](const std::string& field, const std::string& problem) { throw InputError(file, field, problem); };
   const std::string kind = target_kind_name(s.kind);
+  if (s.kind == TargetKind::speckle) {
+    validate_speckle(s, file);
+    return;
+  }
+  refuse_speckle_fields(s, file);
   if (is_single_marker(s.kind)) {
     validate_single_marker(s, file);
     return;
@@ -297,7 +347,8 @@ void validate_target(const TargetSpec& s, const std::string& file) {
       return;
     }
     case TargetKind::aruco_marker:
-    case TargetKind::apriltag: return;  // validated above
+    case TargetKind::apriltag:
+    case TargetKind::speckle: return;  // validated above
   }
 }
 
@@ -308,6 +359,7 @@ bool square_is_black(const TargetSpec& s, int col, int row) {
 
 std::vector<BoardCorner> board_corners(const TargetSpec& s) {
   std::vector<BoardCorner> corners;
+  if (s.kind == TargetKind::speckle) return corners;
   if (is_single_marker(s.kind)) {
     const double o = single_marker_inset_mm(s), m = s.marker_size_mm;
     const double dx[4] = {0, m, m, 0}, dy[4] = {0, 0, m, m};
@@ -333,6 +385,7 @@ std::vector<BoardCorner> board_corners(const TargetSpec& s) {
 }
 
 std::size_t board_corner_count(const TargetSpec& s) {
+  if (s.kind == TargetKind::speckle) return 0;
   if (is_single_marker(s.kind)) return 4;
   if (s.kind == TargetKind::aprilgrid) return 4 * static_cast<std::size_t>(s.squares_x) * s.squares_y;
   if (s.squares_x < 2 || s.squares_y < 2) return 0;
@@ -340,7 +393,7 @@ std::size_t board_corner_count(const TargetSpec& s) {
 }
 
 bool corner_grid(const TargetSpec& s, int& width, int& height, double& spacing_mm) {
-  if (s.kind == TargetKind::aprilgrid || is_single_marker(s.kind)) return false;
+  if (s.kind == TargetKind::aprilgrid || is_single_marker(s.kind) || s.kind == TargetKind::speckle) return false;
   width = s.squares_x - 1;
   height = s.squares_y - 1;
   spacing_mm = s.square_size_mm;
@@ -348,6 +401,7 @@ bool corner_grid(const TargetSpec& s, int& width, int& height, double& spacing_m
 }
 
 Eigen::Vector2d board_size_mm(const TargetSpec& s) {
+  if (s.kind == TargetKind::speckle) return s.plate_size_mm;
   if (is_single_marker(s.kind)) {
     const double side = s.marker_size_mm + 2 * single_marker_inset_mm(s);
     return Eigen::Vector2d(side, side);
@@ -360,7 +414,7 @@ Eigen::Vector2d board_size_mm(const TargetSpec& s) {
 
 std::vector<BoardMarker> board_markers(const TargetSpec& s) {
   std::vector<BoardMarker> markers;
-  if (s.kind == TargetKind::chessboard) return markers;
+  if (s.kind == TargetKind::chessboard || s.kind == TargetKind::speckle) return markers;
   if (is_single_marker(s.kind)) {
     BoardMarker m;
     m.id = s.first_id;
@@ -409,8 +463,19 @@ std::string describe_target(const TargetSpec& s) {
                          s.marker_size_mm);
     case TargetKind::apriltag:
       return fmt::format("{}apriltag, {} id {}, tag size {} mm", named, s.dictionary, s.first_id, s.marker_size_mm);
+    case TargetKind::speckle:
+      return fmt::format("{}speckle, {} x {} mm plate, dots {} mm, fill {}, seed {}", named, s.plate_size_mm.x(),
+                         s.plate_size_mm.y(), s.dot_diameter_mm, s.fill, s.seed);
   }
   return named;
+}
+
+void require_target_corners(const TargetSpec& spec, const std::string& file, const std::string& what) {
+  if (spec.kind == TargetKind::speckle)
+    throw InputError(file, "kind",
+                     fmt::format("a speckle plate has no corners to detect, and {} needs corners; use a chessboard, "
+                                 "charuco, aprilgrid or single-marker spec",
+                                 what));
 }
 
 }  // namespace glasspiv

@@ -8,6 +8,7 @@
 // along the rows, z = 0 on the board; millimetres. A single marker's pattern is
 // the marker itself: the origin is the top-left outer corner of its black
 // border (of its outer data bits for tagStandard41h12 and tagCircle21h7).
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -20,7 +21,9 @@ namespace glasspiv {
 
 // aruco_marker and apriltag: one fiducial marker (an ArUco marker of an OpenCV
 // dictionary, a libapriltag tag), e.g. glued to an experiment's frame.
-enum class TargetKind { chessboard, charuco, aprilgrid, aruco_marker, apriltag };
+// speckle: a plate of random black dots (targets/speckle_plate.h) for dense,
+// photometric model fitting; it has no corners and no markers.
+enum class TargetKind { chessboard, charuco, aprilgrid, aruco_marker, apriltag, speckle };
 
 // ChArUco boards with an even number of rows were printed differently before
 // OpenCV 4.6.0 (see docs/targets.md). Boards with an odd number of rows look the
@@ -60,9 +63,16 @@ struct TargetSpec {
   // marker's id. 0 for chessboards.
   int first_id = 0;
   CharucoLayout charuco_layout = CharucoLayout::opencv;  // charuco only
+  // speckle only (zero for every other kind): the pattern area (width, height),
+  // the diameter of its black discs, the fraction of the area inked, in
+  // (0, kMaxSpeckleFill], and the seed of the dots (targets/speckle_plate.h).
+  Eigen::Vector2d plate_size_mm = Eigen::Vector2d::Zero();
+  double dot_diameter_mm = 0;
+  double fill = 0;
+  std::uint64_t seed = 0;
 };
 
-// "chessboard", "charuco", "aprilgrid", "aruco_marker", "apriltag"
+// "chessboard", "charuco", "aprilgrid", "aruco_marker", "apriltag", "speckle"
 std::string target_kind_name(TargetKind kind);
 bool is_single_marker(TargetKind kind);  // aruco_marker, apriltag
 std::string charuco_layout_name(CharucoLayout layout);  // "opencv", "legacy"
@@ -76,14 +86,23 @@ constexpr int kMaxTargetSquares = 200;
 constexpr double kMinTargetLengthMm = 0.01;
 constexpr double kMaxTargetLengthMm = 10000;
 constexpr double kMaxTargetPatternMm = 10000;
+// A speckle plate: fill at most kMaxSpeckleFill, at most kMaxSpeckleDots dots
+// (a 1 x 1 m plate of 0.5 mm dots at fill 0.4 has 2 million), each side of the
+// plate at least kMinSpeckleDotsAcross dot diameters.
+constexpr double kMaxSpeckleFill = 0.7;
+constexpr double kMaxSpeckleDots = 4e6;
+constexpr double kMinSpeckleDotsAcross = 3;
 
 // Throws InputError(file, field, problem) naming the first thing that is wrong:
 // too few or too many squares, non-finite sizes or sizes beyond the limits above, a marker not
 // smaller than its square, an unknown dictionary, ids beyond the dictionary, a
 // chessboard whose 180-degree turn cannot be told apart (equal parity of both
 // square counts), fields set that the kind does not use (a single marker's
-// squares, square_size_mm, charuco_layout), a single marker's id beyond its
-// dictionary or AprilTag family.
+// squares, square_size_mm, charuco_layout; a speckle plate's squares, markers,
+// dictionary and ids; any other kind's plate_size_mm, dot_diameter_mm, fill,
+// seed), a single marker's id beyond its dictionary or AprilTag family, a
+// speckle plate's fill outside (0, kMaxSpeckleFill], a plate under
+// kMinSpeckleDotsAcross dots across or with more than kMaxSpeckleDots dots.
 void validate_target(const TargetSpec& spec, const std::string& file = "");
 
 // The OpenCV predefined dictionary id (cv::aruco::PREDEFINED_DICTIONARY_NAME) of
@@ -142,17 +161,19 @@ struct BoardCorner {
 //     of the square libapriltag detects), the order of OpenCV's detectMarkers:
 //     (0, 0), (s, 0), (s, s), (0, s) with s = marker_size_mm, shifted by the
 //     inset (2 bits) for reversed-border AprilTag families.
+//   speckle: none (a speckle plate has no corners).
 std::vector<BoardCorner> board_corners(const TargetSpec& spec);
 std::size_t board_corner_count(const TargetSpec& spec);
 
 // The corners as a regular grid (chessboard, charuco): width x height points,
 // spaced `spacing_mm`, the point of id 0 first. An aprilgrid has no such grid:
-// returns false.
+// returns false, as for single markers and speckle plates.
 bool corner_grid(const TargetSpec& spec, int& width, int& height, double& spacing_mm);
 
 // The printed pattern's size (width, height) in mm, margins excluded. A single
 // marker: its black border square (reversed-border AprilTags: with their outer
-// data bits, pattern_cells / border_cells times the tag size).
+// data bits, pattern_cells / border_cells times the tag size). A speckle
+// plate: plate_size_mm.
 Eigen::Vector2d board_size_mm(const TargetSpec& spec);
 
 // Squares of a chessboard or charuco board: is square (col, row) black?
@@ -166,12 +187,16 @@ struct BoardMarker {
   Eigen::Vector2d top_left_mm = Eigen::Vector2d::Zero();
   double size_mm = 0;     // side of its black border (apriltag: of its detected square)
 };
-// In order of id (row by row from the top-left). Empty for chessboards; one
-// for single markers.
+// In order of id (row by row from the top-left). Empty for chessboards and
+// speckle plates; one for single markers.
 std::vector<BoardMarker> board_markers(const TargetSpec& spec);
 
 // One line: "charuco, 11 x 8 squares of 15 mm, markers 11 mm, DICT_5X5_100,
 // first id 0, opencv layout".
 std::string describe_target(const TargetSpec& spec);
+
+// Refuses a target whose corners a command needs but which has none (a speckle
+// plate): InputError(file, "kind", ...) naming `what` the corners are for.
+void require_target_corners(const TargetSpec& spec, const std::string& file, const std::string& what);
 
 }  // namespace glasspiv

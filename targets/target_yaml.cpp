@@ -1,6 +1,8 @@
 #include "targets/target_yaml.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -28,8 +30,9 @@ const std::vector<std::string> kCharucoKeys = {"squares",    "square_size_mm", "
 const std::vector<std::string> kAprilgridKeys = {"tags", "tag_size_mm", "tag_spacing_mm", "dictionary", "first_id"};
 const std::vector<std::string> kArucoMarkerKeys = {"dictionary", "marker_id", "marker_size_mm"};
 const std::vector<std::string> kAprilTagKeys = {"dictionary", "tag_id", "tag_size_mm"};
-const TargetKind kKinds[] = {TargetKind::chessboard, TargetKind::charuco, TargetKind::aprilgrid,
-                             TargetKind::aruco_marker, TargetKind::apriltag};
+const std::vector<std::string> kSpeckleKeys = {"plate_size_mm", "dot_diameter_mm", "fill", "seed"};
+const TargetKind kKinds[] = {TargetKind::chessboard, TargetKind::charuco,  TargetKind::aprilgrid,
+                             TargetKind::aruco_marker, TargetKind::apriltag, TargetKind::speckle};
 
 const std::vector<std::string>& kind_keys(TargetKind kind) {
   switch (kind) {
@@ -38,6 +41,7 @@ const std::vector<std::string>& kind_keys(TargetKind kind) {
     case TargetKind::aprilgrid: return kAprilgridKeys;
     case TargetKind::aruco_marker: return kArucoMarkerKeys;
     case TargetKind::apriltag: return kAprilTagKeys;
+    case TargetKind::speckle: return kSpeckleKeys;
   }
   return kCharucoKeys;
 }
@@ -61,6 +65,25 @@ class Reader : public YamlFields {
   double length(const YAML::Node& node, const std::string& field) const {
     const double value = real(node, field);
     if (!(value > 0)) fail(field, node, "must be a positive length in mm, got " + node.Scalar());
+    return value;
+  }
+
+  // An unsigned 64-bit integer written in decimal digits (no sign, point,
+  // exponent or other base): a seed must read back as the same integer.
+  std::uint64_t unsigned64(const YAML::Node& node, const std::string& field) const {
+    const std::string text = node.IsScalar() ? node.Scalar() : std::string();
+    const bool digits = !text.empty() && text.size() <= 20 &&
+                        std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+    std::uint64_t value = 0;
+    bool fits = digits;
+    for (std::size_t i = 0; fits && i < text.size(); ++i) {
+      const std::uint64_t digit = static_cast<std::uint64_t>(text[i] - '0');
+      if (value > (UINT64_MAX - digit) / 10) fits = false;
+      else value = value * 10 + digit;
+    }
+    if (!fits)
+      fail(field, node, fmt::format("must be a whole number from 0 to {} written in digits, got '{}'", UINT64_MAX,
+                                    node.IsScalar() ? node.Scalar() : std::string("a ") + (node.IsSequence() ? "list" : "mapping")));
     return value;
   }
 
@@ -137,7 +160,17 @@ TargetSpec parse_target_yaml(std::string_view contents, const std::string& path)
 
   spec.name = optional("name") ? r.text(*optional("name"), "name") : default_name(path);
 
-  if (spec.kind == TargetKind::aruco_marker || spec.kind == TargetKind::apriltag) {
+  if (spec.kind == TargetKind::speckle) {
+    const std::vector<double> size = r.reals(required("plate_size_mm"), "plate_size_mm", 2);
+    for (int k = 0; k < 2; ++k)
+      if (!(size[k] > 0))
+        r.fail(fmt::format("plate_size_mm[{}]", k), *optional("plate_size_mm"),
+               fmt::format("must be a positive length in mm, got {}", size[k]));
+    spec.plate_size_mm = Eigen::Vector2d(size[0], size[1]);
+    spec.dot_diameter_mm = r.length(required("dot_diameter_mm"), "dot_diameter_mm");
+    spec.fill = r.real(required("fill"), "fill");
+    spec.seed = r.unsigned64(required("seed"), "seed");
+  } else if (spec.kind == TargetKind::aruco_marker || spec.kind == TargetKind::apriltag) {
     const bool aruco = spec.kind == TargetKind::aruco_marker;
     const std::string id = aruco ? "marker_id" : "tag_id", size = aruco ? "marker_size_mm" : "tag_size_mm";
     spec.dictionary = r.text(required("dictionary"), "dictionary");
@@ -177,6 +210,15 @@ std::string format_target_yaml(const TargetSpec& spec) {
   out << YAML::Key << "glasspiv_target" << YAML::Value << kVersion;
   if (!spec.name.empty()) out << YAML::Key << "name" << YAML::Value << spec.name;
   out << YAML::Key << "kind" << YAML::Value << target_kind_name(spec.kind);
+  if (spec.kind == TargetKind::speckle) {
+    out << YAML::Key << "plate_size_mm" << YAML::Value << YAML::Flow << YAML::BeginSeq
+        << format_number(spec.plate_size_mm.x()) << format_number(spec.plate_size_mm.y()) << YAML::EndSeq;
+    out << YAML::Key << "dot_diameter_mm" << YAML::Value << format_number(spec.dot_diameter_mm);
+    out << YAML::Key << "fill" << YAML::Value << format_number(spec.fill);
+    out << YAML::Key << "seed" << YAML::Value << std::to_string(spec.seed);
+    out << YAML::EndMap;
+    return "# glasspiv speckle plate (docs/targets.md): " + one_line(describe_target(spec)) + "\n" + out.c_str() + "\n";
+  }
   if (is_single_marker(spec.kind)) {
     const bool aruco = spec.kind == TargetKind::aruco_marker;
     out << YAML::Key << "dictionary" << YAML::Value << spec.dictionary;

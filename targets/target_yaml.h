@@ -19,6 +19,15 @@
 //   marker_id: 7             # apriltag: tag_id
 //   marker_size_mm: 40       # apriltag: tag_size_mm
 //
+// A speckle plate (targets/speckle_plate.h):
+//
+//   glasspiv_target: 1
+//   kind: speckle
+//   plate_size_mm: [150, 120] # the pattern area, width and height
+//   dot_diameter_mm: 0.5
+//   fill: 0.4                # the fraction of the area inked, (0, 0.7]
+//   seed: 1                  # an unsigned 64-bit integer, in digits
+//
 // Readers reject unknown keys, keys of another kind, wrong types and invalid
 // values with InputError(file, field, problem).
 #include <string>

@@ -3,6 +3,7 @@
 // and the detected corners must lie where the camera projects the world corners.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 
 #include <opencv2/core.hpp>
@@ -125,6 +126,33 @@ TEST(SceneFiducials, ASetupWithoutASheetIsPreparedForAlignment) {
   look.textures = with_sheet.textures_by_solid();
   const std::vector<float> b = render_setup(with_sheet.trace, look, with_sheet.camera().model, pose, TraceOptions{}, 1, 0);
   EXPECT_EQ(a, b);
+}
+
+// A speckle plate on a rectangle is drawn like any target texture, but it has
+// no corners: it is no fiducial.
+TEST(SceneFiducials, ASpecklePlateIsDrawnButIsNoFiducial) {
+  TempDir dir("align_fiducials");
+  const auto plate = [](int seed) {
+    return "glasspiv_target: 1\nkind: speckle\nplate_size_mm: [140, 100]\ndot_diameter_mm: 1.5\nfill: 0.4\nseed: " +
+           std::to_string(seed) + "\n";
+  };
+  std::vector<float> pictures[2];
+  for (int seed : {1, 2}) {
+    write(dir.file("board.yaml"), plate(seed));
+    write(dir.file("scene.yaml"), scene_text("[170, 130]"));
+    const PreparedScene ps = prepare_scene(dir.file("scene.yaml"), "cam", 1, SceneUse::setup_only);
+    EXPECT_TRUE(scene_fiducials(ps.scene).empty());
+    SetupLook look;
+    look.background_radiance = 0.3;
+    look.textures = ps.textures_by_solid();
+    pictures[seed - 1] =
+        render_setup(ps.trace, look, ps.camera().model, *ps.camera().camera_from_world, TraceOptions{}, 1, 0);
+  }
+  // Dots and paper: the picture's values spread; another seed, another picture.
+  const auto [lo, hi] = std::minmax_element(pictures[0].begin(), pictures[0].end());
+  EXPECT_LT(*lo, 0.15f);
+  EXPECT_GT(*hi, 0.6f);
+  EXPECT_NE(pictures[0], pictures[1]);
 }
 
 TEST(SceneFiducials, APatternLargerThanItsRectangleIsRefused) {

@@ -106,4 +106,25 @@ has err.txt "chessboard_9x6.yaml: the target"
 has err.txt "was found in none of the 1 images"
 expect 2 "$G" calib detect a.png --target "$D/aprilgrid_6x6.yaml" -o obs.yaml --vnl c.vnl
 has err.txt "c.vnl: field '--vnl'"
+
+# --- speckle plates: show, print (SVG, PDF, PNG); detection refuses them
+S="$D/speckle_150x120_0.5mm.yaml"
+expect 0 "$G" target show "$S"
+has out.txt "dots of 0.5 mm, one in each cell of a 223 x 179 grid"
+expect 0 "$G" target print "$S" -o plate.svg --png plate.png --dpi 300
+has plate.svg "speckle plate 150 x 120 mm, dot diameter 0.5 mm, fill 0.4, seed 1"
+has plate.svg "<circle cx="
+[ -s plate.png ] || fail "no plate.png"
+expect 0 "$G" target print "$S" -o plate.pdf
+[ -s plate.pdf ] || fail "no plate.pdf"
+expect 2 "$G" calib detect a.png --target "$S" -o obs.yaml
+has err.txt "speckle_150x120_0.5mm.yaml: field 'kind': a speckle plate has no corners"
+expect 2 "$G" calib intrinsics a.png --target "$S" -o cam.yaml
+has err.txt "speckle_150x120_0.5mm.yaml: field 'kind': a speckle plate has no corners"
+printf 'not read\n' >unread_obs.yaml
+expect 2 "$G" calib next unread_obs.yaml --target "$S"
+has err.txt "field 'kind': a speckle plate has no corners to detect, and calib next needs corners"
+printf 'glasspiv_target: 1\nkind: speckle\nplate_size_mm: [50, 40]\ndot_diameter_mm: 1\nfill: 0.4\nseed: -1\n' >neg_seed.yaml
+expect 2 "$G" target show neg_seed.yaml
+has err.txt "neg_seed.yaml: field 'seed'"
 echo "target CLI: all checks passed"
