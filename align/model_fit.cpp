@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
 
@@ -232,6 +233,8 @@ class Fitter {
                         const std::vector<double>& weight, double sigma, const Eigen::VectorXd& theta,
                         Eigen::MatrixXd* H, Eigen::VectorXd* g) const;
   double prior_cost(const Eigen::VectorXd& theta) const;
+  Eigen::MatrixXd gauge(const Eigen::VectorXd& theta) const;
+  void weak_combinations(const Eigen::MatrixXd& H, const Eigen::VectorXd& theta, ModelFitResult* result) const;
 
   const TraceScene& drawing_;
   const std::vector<PlatePhoto>& photos_;
@@ -659,6 +662,106 @@ double rms(const std::vector<double>& r) {
   return r.empty() ? 0 : std::sqrt(s / static_cast<double>(r.size()));
 }
 
+// The gauge: the six rigid motions of the world (translations along, turns
+// about the world axes through the origin) that move camera, glass and plate
+// together and so change no photo, as columns in parameter units.
+Eigen::MatrixXd Fitter::gauge(const Eigen::VectorXd& theta) const {
+  const Model m = apply(drawing_, photos_, params_, theta);
+  const int P = static_cast<int>(params_.size());
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(P, 6);
+  const SheetPlane& sheet = m.scene.sheet;
+  Eigen::Matrix3d axes;
+  axes << sheet.s_axis, sheet.t_axis, sheet.normal();
+  for (int a = 0; a < 6; ++a) {
+    const bool turn = a >= 3;
+    const Eigen::Vector3d e = Eigen::Vector3d::Unit(a % 3);
+    auto moved = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d { return turn ? Eigen::Vector3d(e.cross(p)) : e; };
+    for (int k = 0; k < P; ++k) {
+      const Param& p = params_[static_cast<std::size_t>(k)];
+      double v = 0;
+      switch (p.kind) {
+        case Kind::camera_rotation:
+          if (turn) v = -(m.camera_from_world[static_cast<std::size_t>(p.view)].rotation * e)[p.axis];
+          break;
+        case Kind::camera_position: {
+          const RigidTransform& c = m.camera_from_world[static_cast<std::size_t>(p.view)];
+          v = moved(-c.rotation.transpose() * c.translation_mm)[p.axis];
+          break;
+        }
+        case Kind::sheet_rotation:
+          if (turn) v = (axes.transpose() * e)[p.axis];
+          break;
+        case Kind::sheet_position: v = (axes.transpose() * moved(sheet.origin_mm))[p.axis]; break;
+        case Kind::sphere_centre:
+          v = moved(std::get<Sphere>(m.scene.solids[static_cast<std::size_t>(p.solid)].shape).centre_mm)[p.axis];
+          break;
+        default: break;
+      }
+      g(k, a) = v;
+    }
+  }
+  return g;
+}
+
+// What the photos cannot pin down: the combinations of parameters along which
+// the photos' information (whitened by the tolerances: 1 = as much as the
+// drawing's tolerance gives) is below 1, the gauge projected out first.
+void Fitter::weak_combinations(const Eigen::MatrixXd& H, const Eigen::VectorXd& theta, ModelFitResult* result) const {
+  const int P = static_cast<int>(params_.size());
+  std::vector<int> geo;
+  for (int k = 0; k < P; ++k)
+    if (params_[static_cast<std::size_t>(k)].prior_sigma > 0) geo.push_back(k);
+  const int G = static_cast<int>(geo.size());
+  if (G == 0) return;
+  // The photos' information on the geometry, the photometric terms eliminated
+  // (Schur complement), whitened.
+  std::vector<int> photometric;
+  for (int k = 0; k < P; ++k)
+    if (params_[static_cast<std::size_t>(k)].prior_sigma == 0) photometric.push_back(k);
+  Eigen::MatrixXd Hgg(G, G), Hgp(G, static_cast<int>(photometric.size())),
+      Hpp(static_cast<int>(photometric.size()), static_cast<int>(photometric.size()));
+  for (int a = 0; a < G; ++a) {
+    for (int b = 0; b < G; ++b) Hgg(a, b) = H(geo[static_cast<std::size_t>(a)], geo[static_cast<std::size_t>(b)]);
+    for (std::size_t b = 0; b < photometric.size(); ++b) Hgp(a, static_cast<int>(b)) = H(geo[static_cast<std::size_t>(a)], photometric[b]);
+  }
+  for (std::size_t a = 0; a < photometric.size(); ++a)
+    for (std::size_t b = 0; b < photometric.size(); ++b) Hpp(static_cast<int>(a), static_cast<int>(b)) = H(photometric[a], photometric[b]);
+  Eigen::MatrixXd info = Hgg;
+  if (!photometric.empty()) info -= Hgp * Hpp.ldlt().solve(Hgp.transpose());
+  Eigen::VectorXd S(G);
+  for (int a = 0; a < G; ++a) {
+    const double sk = params_[static_cast<std::size_t>(geo[static_cast<std::size_t>(a)])].prior_sigma;
+    S[a] = sk;
+    info(a, a) -= 1 / (sk * sk);  // the photos' share only
+  }
+  Eigen::MatrixXd W = S.asDiagonal() * info * S.asDiagonal();
+  // Project out the gauge (whitened, orthonormalised).
+  const Eigen::MatrixXd g_all = gauge(theta);
+  Eigen::MatrixXd g(G, 6);
+  for (int a = 0; a < G; ++a) g.row(a) = g_all.row(geo[static_cast<std::size_t>(a)]) / S[a];
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(g);
+  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(G, std::min(6, G));
+  const Eigen::MatrixXd proj = Eigen::MatrixXd::Identity(G, G) - Q * Q.transpose();
+  W = proj * W * proj;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(W);
+  for (int k = 0; k < G; ++k) {
+    const double information = eig.eigenvalues()[k];
+    const Eigen::VectorXd v = eig.eigenvectors().col(k);
+    if (information >= 1 || (Q.transpose() * v).norm() > 0.5) continue;  // determined, or a gauge direction
+    WeakCombination w;
+    w.information = std::max(0.0, information);
+    std::vector<int> order(static_cast<std::size_t>(G));
+    for (int a = 0; a < G; ++a) order[static_cast<std::size_t>(a)] = a;
+    std::sort(order.begin(), order.end(), [&](int x, int y) { return std::abs(v[x]) > std::abs(v[y]); });
+    for (int i = 0; i < std::min(G, 6); ++i) {
+      const int a = order[static_cast<std::size_t>(i)];
+      if (std::abs(v[a]) < 0.15) break;
+      w.parts.emplace_back(params_[static_cast<std::size_t>(geo[static_cast<std::size_t>(a)])].name, v[a]);
+    }
+    result->weak.push_back(w);
+  }
+}
+
 ModelFitResult Fitter::run() {
   const auto t0 = std::chrono::steady_clock::now();
   ModelFitResult result;
@@ -858,13 +961,7 @@ ModelFitResult Fitter::run() {
     f.prior_sigma = p.prior_sigma * p.report_scale;
     result.parameters.push_back(f);
   }
-  for (int a = 0; a < G; ++a)
-    for (int b = a + 1; b < G; ++b) {
-      const double denom = std::sqrt(result.covariance(a, a) * result.covariance(b, b));
-      if (denom > 0 && std::abs(result.covariance(a, b) / denom) > 0.95)
-        result.inseparable.emplace_back(result.parameters[static_cast<std::size_t>(a)].name,
-                                        result.parameters[static_cast<std::size_t>(b)].name);
-    }
+  weak_combinations(H, theta, &result);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

@@ -141,6 +141,11 @@ struct ModelFitLevel {
   double seconds = 0;
 };
 
+struct WeakCombination {
+  double information = 0;
+  std::vector<std::pair<std::string, double>> parts;  // parameter name, weight in the unit vector
+};
+
 struct ModelFitResult {
   TraceScene scene;                           // the fitted model (sheet and solids)
   std::vector<RigidTransform> camera_from_world;  // per photo
@@ -148,8 +153,14 @@ struct ModelFitResult {
   std::vector<FittedParameter> parameters;    // the free geometric parameters, in order
   Eigen::MatrixXd covariance;                 // of `parameters`, in their units
   std::vector<int> unseen_spheres;            // solid indices of glass spheres no pixel looks through
-  // Pairs of parameters the photos cannot tell apart (|correlation| > 0.95).
-  std::vector<std::pair<std::string, std::string>> inseparable;
+  // What the photos cannot pin down: combinations of parameters (unit vectors
+  // over the tolerance-whitened parameters, the largest parts named) along
+  // which the photos give less information than the drawing's tolerances,
+  // after leaving out the gauge (a rigid motion of camera, glass and plate
+  // together changes no photo; the tolerances alone fix it). Along them the
+  // fit stays near the drawing. information: the photos' share, 1 = as much as
+  // the tolerance; 0 = none.
+  std::vector<WeakCombination> weak;
   std::vector<ModelFitLevel> levels;
   double residual_rms_start = 0;  // finest level, at the drawing (photo units)
   double residual_rms_end = 0;

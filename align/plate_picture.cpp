@@ -5,10 +5,10 @@
 namespace glasspiv {
 
 PlateTexture plate_texture(const TargetSpec& spec, double mm_per_texel) {
-  const TargetRender render = render_target(spec, 1.0 / mm_per_texel, 0.0);
+  const cv::Mat ink = target_ink_coverage(spec, 1.0 / mm_per_texel, 0.0);
   const Eigen::Vector2d size = board_size_mm(spec);
-  cv::Mat paper;
-  render.image.convertTo(paper, CV_32F, 1.0 / 255.0);
+  cv::Mat paper = 1.0 - ink;  // exact area coverage, not 8-bit levels
+  if (!paper.isContinuous()) paper = paper.clone();
   // The raster spans [0, cols / px] x [0, rows / px] mm of the board; its
   // centre lies (cols / px - w) / 2 right of and (rows / px - h) / 2 below the
   // pattern's centre, i.e. at (+dx, -dy) on the sheet.

@@ -19,8 +19,8 @@ struct PlateTexture {
   PlatePicture picture() const { return {texture.get(), width_mm, height_mm}; }
 };
 
-// The target's pattern rendered with exact area coverage at about
-// mm_per_texel (render_target). The raster's last row and column may reach
+// The target's pattern rendered with exact area coverage at mm_per_texel
+// (targets/target_image.h target_ink_coverage). The raster's last row and column may reach
 // past the pattern (white): the texture's centre is placed where the pattern's
 // centre lands, so the plate stays centred on the sheet origin to round-off.
 // Throws InputError for an invalid spec or a raster over render_target's limit.

@@ -139,7 +139,12 @@ void run_fit(const FitOptions& o) {
   for (int s : fit.unseen_spheres)
     std::printf("no pixel looks through %s: left at the drawing\n",
                 spheres[static_cast<std::size_t>(s)].field.c_str());
-  for (const auto& [a, b] : fit.inseparable) std::printf("the photos cannot tell %s from %s (|correlation| > 0.95)\n", a.c_str(), b.c_str());
+  for (const WeakCombination& w : fit.weak) {
+    std::string parts;
+    for (const auto& [name, weight] : w.parts) parts += fmt::format("{}{:+.2f} {}", parts.empty() ? "" : ", ", weight, name);
+    std::printf("the photos cannot separate (%.0f %% of the drawing's information): %s\n", 100 * w.information,
+                parts.c_str());
+  }
 
   std::vector<FittedCamera> cams;
   for (std::size_t i = 0; i < views.size(); ++i)
@@ -164,7 +169,11 @@ void run_fit(const FitOptions& o) {
       j["parameters"].push_back({{"name", p.name}, {"drawing", p.drawing}, {"fitted", p.fitted}, {"sigma", p.sigma},
                                  {"tolerance", p.prior_sigma}, {"determined", p.determined()}});
     for (int s : fit.unseen_spheres) j["unseen_spheres"].push_back(spheres[static_cast<std::size_t>(s)].field);
-    for (const auto& [a, b] : fit.inseparable) j["inseparable"].push_back({a, b});
+    for (const WeakCombination& w : fit.weak) {
+      nlohmann::json parts;
+      for (const auto& [name, weight] : w.parts) parts.push_back({{"parameter", name}, {"weight", weight}});
+      j["weak_combinations"].push_back({{"information", w.information}, {"parts", parts}});
+    }
     for (const ModelFitLevel& l : fit.levels)
       j["levels"].push_back({{"binning", l.binning}, {"pixels", l.pixels}, {"residual_before", l.rms_before},
                              {"residual_after", l.rms_after}, {"photo_sd", l.photo_sd}, {"iterations", l.iterations},
