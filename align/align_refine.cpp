@@ -5,6 +5,7 @@
 #include <memory>
 #include <stdexcept>
 #include <type_traits>
+#include <utility>
 #include <variant>
 
 #include <ceres/ceres.h>
@@ -12,11 +13,14 @@
 
 #include "align/refraction_pose.h"
 #include "calib/fit/ceres_logging.h"
+#include "render/scene.h"
 #include "render/scene_index.h"
 #include "util/stopwatch.h"
 
 namespace glasspiv {
 namespace {
+
+constexpr double kMinFocalScale = 0.1;  // a focal length optimised down to a tenth is no result
 
 // Parameter vector: camera perturbation (rotation 3 rad, translation 3 mm, both
 // in the camera frame: camera_from_world = delta * start), then the optional
@@ -134,6 +138,16 @@ class LevelProblem : public ceres::CostFunction {
     const double rms = pixels_.empty() ? 0 : std::sqrt(sum2 / static_cast<double>(pixels_.size()));
     picture_weight_ = std::sqrt(1.0 / footprint_px) / std::max(options_.feature_sigma, rms);
     return rms;
+  }
+
+  // The objective at p, 1/2 the sum of the squared residuals, with the
+  // picture's present weight. One render.
+  double cost_at(const double* p) const {
+    std::vector<double> r(static_cast<std::size_t>(num_residuals()));
+    residuals(p, r.data());
+    double sum2 = 0;
+    for (double x : r) sum2 += x * x;
+    return 0.5 * sum2;
   }
 
   // The residuals at p: normalised photo features minus normalised render features.
@@ -278,8 +292,14 @@ RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, co
   const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
   const double distance_mm = typical_distance_mm(scene, start_camera_from_world);
   std::vector<double> p(static_cast<std::size_t>(layout.size()), 0.0);
+  std::pair<double, double> glass_index_range{kMaxRefractiveIndex, kMinRefractiveIndex};
+  for (const TraceSolid& solid : scene.solids)
+    if (solid.material.kind == TraceMaterial::Kind::glass) {
+      glass_index_range.first = std::min(glass_index_range.first, solid.material.refractive_index);
+      glass_index_range.second = std::max(glass_index_range.second, solid.material.refractive_index);
+    }
   RefineResult result;
-  for (int b : options.binning_levels) {
+  for (const int& b : options.binning_levels) {
     if (b < 1) throw std::invalid_argument("refine_alignment: binning levels must be >= 1");
     const Stopwatch level_time;
     const CameraModel level_camera = binned(camera, b);
@@ -306,9 +326,24 @@ RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, co
           .gradient_ncc;
     };
     level.gradient_ncc_before = ncc_at(p);
+    // The finest level also scores the start, to judge the whole refinement by.
+    const bool last = &b == &options.binning_levels.back();
+    const std::vector<double> start(p.size(), 0.0);
+    if (last) {
+      result.score_start = ncc_at(start);
+      if (!corners.empty()) result.corner_rms_start_px = cost->corner_rms_px(start.data(), &result.corners_lost_start);
+    }
     if (!corners.empty()) level.picture_rms_before = cost->weigh_picture_at(p.data());
     ceres::Problem problem;
     problem.AddResidualBlock(cost, nullptr, p.data());
+    // The model stays one the tracer may trace: a positive focal length, every
+    // glass index within the scene's limits (the optics need n > 0).
+    int k = 6;
+    if (layout.focal) problem.SetParameterLowerBound(p.data(), k++, kMinFocalScale - 1);
+    if (layout.index) {
+      problem.SetParameterLowerBound(p.data(), k, kMinRefractiveIndex - glass_index_range.first);
+      problem.SetParameterUpperBound(p.data(), k, kMaxRefractiveIndex - glass_index_range.second);
+    }
     ceres::Solver::Options solver;
     solver.linear_solver_type = ceres::DENSE_QR;
     solver.max_num_iterations = options.max_iterations;
@@ -318,9 +353,14 @@ RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, co
     ceres::Solver::Summary summary;
     ceres::Solve(solver, &problem, &summary);
     level.iterations = static_cast<int>(summary.iterations.size()) - 1;
+    if (last) {  // the finest level's objective, one weighting, at the start and at the result
+      result.objective_start = cost->cost_at(start.data());
+      result.objective_end = cost->cost_at(p.data());
+    }
+    result.successful_steps += summary.num_successful_steps;
     level.gradient_ncc_after = ncc_at(p);
     if (!corners.empty()) level.corner_rms_px_after = cost->corner_rms_px(p.data(), &level.corners_lost);
-    level.renders = renders + 2;
+    level.renders = renders + 2 + (last ? 1 : 0);
     level.seconds = level_time.seconds();
     result.renders += level.renders;
     result.levels.push_back(level);
@@ -330,6 +370,20 @@ RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, co
   result.focal_scale = m.focal_scale;
   result.refractive_index_offset = m.index_offset;
   result.glass_offset_mm = m.glass_offset_mm;
+  result.score_end = result.levels.back().gradient_ncc_after;
+  result.corner_rms_end_px = result.levels.back().corner_rms_px_after;
+  result.corners_lost_end = result.levels.back().corners_lost;
+  // Judged at the finest level by the objective, one weighting at the start and
+  // the result (with corners the picture may give up a little of its score for
+  // them); a corner that loses its image counts as a miss of zero there, so
+  // losing corners is worse in itself, and without corners so is a lower score.
+  const bool worse = !(result.objective_end <= result.objective_start) ||
+                     result.corners_lost_end > result.corners_lost_start ||
+                     (corners.empty() && !(result.score_end >= result.score_start));
+  if (result.successful_steps == 0 || result.objective_end == result.objective_start)
+    result.status = RefineStatus::no_step;
+  else if (worse)
+    result.status = RefineStatus::worse;
   result.seconds = total.seconds();
   return result;
 }

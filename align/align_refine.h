@@ -99,7 +99,28 @@ struct RefineLevel {
   int corners_lost = 0;            // corners without a traced image at the end of the level
 };
 
+// How a refinement ended. A result that is not `improved` must not be used as a
+// pose: `no_step`, no level took a successful step or the score did not change
+// (a camera looking away renders nothing: its steps move it through a flat
+// objective); `worse`, the result is worse than the start at the finest level:
+// its objective (one weighting for both) higher, more fiducial corners without
+// an image (a lost corner is a miss of zero in the objective, so a start far
+// off can drift to where none is seen), or, without corners, the score
+// (gradient NCC against the photo) lower.
+enum class RefineStatus { improved, no_step, worse };
+
 struct RefineResult {
+  RefineStatus status = RefineStatus::improved;
+  // Gradient NCC at the last (finest) level's binning: at the start pose and
+  // at the result (= levels.back().gradient_ncc_after).
+  double score_start = 0, score_end = 0;
+  // With corners, at the finest level: their RMS (full-resolution px) and how
+  // many have no traced image, at the start and at the result.
+  double corner_rms_start_px = 0, corner_rms_end_px = 0;
+  int corners_lost_start = 0, corners_lost_end = 0;
+  // The finest level's objective (1/2 sum of squared residuals) at the start and at the result.
+  double objective_start = 0, objective_end = 0;
+  int successful_steps = 0;  // over all levels
   RigidTransform camera_from_world;
   double focal_scale = 1;
   double refractive_index_offset = 0;
@@ -111,7 +132,11 @@ struct RefineResult {
 
 // `photo32f`: CV_32FC1 of the camera's size (values in any units: they are
 // normalised). Throws std::invalid_argument for a photo of another size or an
-// empty level list (commands check the user's input first).
+// empty level list (commands check the user's input first). The result's
+// status says whether it may be used (RefineStatus): the objective's minimum
+// is not always the photo's pose (corners out of view count as misses of
+// zero, a render of nothing has no edges to disagree with), so the score is
+// measured at the start and at the result on the finest level.
 RefineResult refine_alignment(const TraceScene& scene, const SetupLook& look, const CameraModel& camera,
                               const RigidTransform& start_camera_from_world, const cv::Mat& photo32f,
                               const RefineParameters& parameters = {}, const RefineOptions& options = {},

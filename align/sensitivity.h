@@ -38,7 +38,9 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "calib/camera_model.h"
@@ -46,6 +48,27 @@
 #include "render/path_tracer.h"
 
 namespace glasspiv {
+
+// Limits of the tolerances: a 1-sigma camera rotation beyond this is no small
+// change (docs/limits.md); the contact overlap a sphere diameter change may
+// make between touching spheres, as a fraction of the smallest sphere's
+// diameter (see invalid models below).
+constexpr double kMaxRotationToleranceDeg = 10;
+constexpr double kMaxContactOverlap = 0.01;
+
+// What makes a sensitivity unmeasurable: `tolerance` names the ModelTolerances
+// field at fault ("refractive_index", "pose_covariance", ...), or is "" when the
+// camera or the tolerances together are (a camera that sees no sheet, a Monte
+// Carlo draw, every tolerance 0), so that a command can name its option.
+class SensitivityError : public std::invalid_argument {
+ public:
+  SensitivityError(std::string tolerance, const std::string& problem)
+      : std::invalid_argument(problem), tolerance_(std::move(tolerance)) {}
+  const std::string& tolerance() const { return tolerance_; }
+
+ private:
+  std::string tolerance_;
+};
 
 // 1-sigma of independent Gaussian errors. A zero figure leaves its parameter out.
 struct ModelTolerances {
@@ -100,8 +123,17 @@ struct SensitivityMap {
 };
 
 // samples and seed are used by monte_carlo only (samples >= 2 there). Throws
-// std::invalid_argument for grid_step_px < 1, negative tolerances, a
-// pose_covariance that is not symmetric positive semi-definite, or too few samples.
+// std::invalid_argument for grid_step_px < 1 or too few samples, and
+// SensitivityError (before any trace) for negative or non-finite tolerances, a
+// rotation tolerance over kMaxRotationToleranceDeg, a pose_covariance that is
+// not symmetric positive semi-definite, every tolerance 0, and a perturbed
+// model (+-1 sigma, or a Monte Carlo draw) that is not a valid scene: a glass
+// index outside [kMinRefractiveIndex, kMaxRefractiveIndex], a sphere under
+// kMinSceneSize_mm across, the camera or glass beyond kMaxSceneCoordinate_mm,
+// solids overlapping (touching spheres grown by at most kMaxContactOverlap of
+// the smallest diameter count as touching); and (after the traces) when no
+// sample point sees the sheet in the nominal model, or none keeps its view in
+// every perturbed one (naming the parameter that loses the most).
 SensitivityMap model_sensitivity(const TraceScene& scene, const CameraModel& model,
                                  const RigidTransform& camera_from_world, const ModelTolerances& tol, int samples,
                                  std::uint64_t seed, const SensitivityOptions& options = {});

@@ -32,6 +32,7 @@
 #include "render/setup_render.h"
 #include "targets/photo_io.h"
 #include "util/atomic_file.h"
+#include "util/file_identity.h"
 #include "util/image_file.h"
 #include "util/input_error.h"
 #include "util/progress_bar.h"
@@ -222,6 +223,11 @@ void run_pose(const AlignOptions& o) {
     it->second.push_back(file);
   }
   if (per_camera.empty()) throw InputError("", "PHOTO", "give the photos (PHOTO... with --camera, or --photo CAMERA=FILE)");
+  // Each photo is one view: the same file (or a copy) twice would count its
+  // corners twice and shrink the reported uncertainty.
+  std::vector<std::string> all_photos;
+  for (const auto& [name, files] : per_camera) all_photos.insert(all_photos.end(), files.begin(), files.end());
+  check_distinct_inputs(all_photos, "PHOTO", "photo");
   // Every output against the scene's files and every photo, before any work.
   const Scene scene = read_scene(o.scene);
   std::vector<std::string> inputs = scene_input_files(scene);
@@ -372,6 +378,23 @@ void run_refine(const AlignOptions& o) {
                                               l.corners_lost ? fmt::format(" ({} without an image)", l.corners_lost) : "")
                                       .c_str());
   const auto [mm, deg] = pose_change(start, r.camera_from_world);
+  // A refinement that took no step or lowered the score is no pose: nothing is written.
+  if (r.status == RefineStatus::no_step)
+    throw InputError(o.scene, "", fmt::format("camera '{}': the refinement took no step from the start (gradient NCC "
+                                              "{:.4f} at binning {}): the start shows too little of the setup; "
+                                              "nothing written",
+                                              ps.camera_name(), r.score_start, r.levels.back().binning));
+  if (r.status == RefineStatus::worse)
+    throw InputError(
+        o.scene, "",
+        fmt::format("camera '{}': the refinement ended worse than it started ({} at binning {}; {:.1f} mm and {:.2f} "
+                    "deg from the start): the start is too far off; nothing written",
+                    ps.camera_name(),
+                    corners.empty() ? fmt::format("gradient NCC {:.4f} -> {:.4f}", r.score_start, r.score_end)
+                                    : fmt::format("corners RMS {:.3f} -> {:.3f} px, {} -> {} without an image",
+                                                  r.corner_rms_start_px, r.corner_rms_end_px, r.corners_lost_start,
+                                                  r.corners_lost_end),
+                    r.levels.back().binning, mm, deg));
   std::printf("refined pose: %s\n  moved %.4f mm, %.5f deg from the start; %d renders in %.1f s\n",
               describe_pose(r.camera_from_world).c_str(), mm, deg, r.renders, r.seconds);
   if (o.refine_focal) std::printf("  focal scale %.6f\n", r.focal_scale);
@@ -454,8 +477,23 @@ void run_sensitivity(const AlignOptions& o) {
   options.grid_step_px = o.step_px;
   options.threads = o.threads;
   if (o.mc_samples > 1) options.method = SensitivityMethod::monte_carlo;
-  const SensitivityMap m = model_sensitivity(ps.trace, ps.camera().model, *ps.camera().camera_from_world, tol,
-                                             std::max(o.mc_samples, 2), o.seed, options);
+  SensitivityMap m;
+  try {
+    m = model_sensitivity(ps.trace, ps.camera().model, *ps.camera().camera_from_world, tol, std::max(o.mc_samples, 2),
+                          o.seed, options);
+  } catch (const SensitivityError& e) {
+    // The option that set the tolerance at fault; the scene's camera otherwise.
+    const std::string& t = e.tolerance();
+    if (t == "pose_covariance") throw InputError(o.pose_json, "covariance", e.what());
+    const char* option = t == "camera_position_mm"    ? "--camera-mm"
+                         : t == "camera_rotation_deg" ? "--camera-deg"
+                         : t == "glass_position_mm"   ? "--glass-mm"
+                         : t == "sphere_diameter_mm"  ? "--diameter-mm"
+                         : t == "refractive_index"    ? "--index"
+                                                      : nullptr;
+    if (option) throw InputError("", option, e.what());
+    throw InputError(o.scene, "", fmt::format("camera '{}': {}", ps.camera_name(), e.what()));
+  }
   std::printf("sensitivity of camera '%s' (%s, %dx%d samples every %d px, %d see the sheet directly)\n",
               ps.camera_name().c_str(), o.mc_samples > 1 ? "Monte Carlo" : "first order", m.width, m.height,
               m.grid_step_px, m.valid_points);

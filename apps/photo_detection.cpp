@@ -15,6 +15,7 @@
 #include "targets/photo_io.h"
 #include "targets/target_detect.h"
 #include "util/atomic_file.h"
+#include "util/file_identity.h"
 #include "util/input_error.h"
 #include "util/progress_bar.h"
 
@@ -110,6 +111,8 @@ void check_calib_outputs(const std::vector<std::string>& inputs, const std::vect
 Observations detect_in_photos(const std::vector<std::string>& photos, const TargetSpec& spec,
                               const std::string& target_path, const PhotoDetectionOptions& options) {
   require_target_corners(spec, target_path, "corner detection");
+  // A photo named twice (a folder and a file in it, a link, a copy) is one view.
+  check_distinct_inputs(photos, "", "photo");
   DetectOptions detect_options;
   detect_options.require_layout_evidence = !options.lenient_layout;
   const TargetDetector detector(spec, detect_options);

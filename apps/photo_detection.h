@@ -39,8 +39,11 @@ struct CalibOutput {
 void check_calib_outputs(const std::vector<std::string>& inputs, const std::vector<CalibOutput>& outputs);
 
 // Detects `spec` in every photo. `target_path` names the spec in errors.
-// Throws InputError for an unreadable photo (naming it), photos of different
-// sizes (naming the file and both sizes), or a target found in none of them.
+// Throws InputError for a photo given twice, before any detection: the same
+// file (a folder and a file in it, a link) or a copy with the same bytes
+// (util/file_identity.h), as one view counted twice would shrink a fit's
+// uncertainty; for an unreadable photo (naming it), photos of different sizes
+// (naming the file and both sizes), or a target found in none of them.
 Observations detect_in_photos(const std::vector<std::string>& photos, const TargetSpec& spec,
                               const std::string& target_path, const PhotoDetectionOptions& options);
 

@@ -152,6 +152,18 @@ void check_options(const SimulateOptions& o) {
   positive(o.vtk_mm_per_length, "--vtk-mm-per-length", "mm per file length unit");
 }
 
+// The option that sets a PivExperimentSettings field (ExperimentSettingError::setting).
+std::string option_of_setting(const std::string& setting) {
+  if (setting == "flow") return "--flow";
+  if (setting == "dt_s") return "--dt-s";
+  if (setting == "time_a_s") return "--time-a-s";
+  if (setting == "density_ppp") return "--density-ppp";
+  if (setting == "particle_px") return "--particle-px";
+  if (setting == "peak_radiance") return "--peak-fraction";
+  if (setting == "bit_depth") return "--bit-depth";
+  return setting;
+}
+
 // The truth as a PIV vector field (piv/vector_file.h columns), flag 2 where it has none.
 PivField truth_field(const InterrogationGrid& grid, const CameraTruth& t) {
   PivField f;
@@ -265,6 +277,8 @@ void run_simulate(const SimulateOptions& o) {
       e = simulate_piv_experiment(cs.trace, *cs.scene.sheet, cameras, *flow, s, [&bar](double f) {
         bar.set_done(static_cast<std::size_t>(1000 * f));
       });
+    } catch (const ExperimentSettingError& ex) {
+      throw InputError("", option_of_setting(ex.setting()), ex.what());
     } catch (const std::invalid_argument& ex) {
       throw InputError(o.scene, "", ex.what());
     }

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <exception>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -20,8 +21,17 @@ int for_each_row(int rows, int threads, const std::function<void(int, int)>& row
   int running = threads;
   std::mutex m;
   std::condition_variable finished;
+  // The first exception a row throws stops the hand-out of rows and is
+  // rethrown on the calling thread once every worker has stopped.
+  std::exception_ptr first_error;
   auto worker = [&](int thread) {
-    for (int row = next_row.fetch_add(1); row < rows; row = next_row.fetch_add(1)) row_fn(row, thread);
+    try {
+      for (int row = next_row.fetch_add(1); row < rows; row = next_row.fetch_add(1)) row_fn(row, thread);
+    } catch (...) {
+      next_row.store(rows);
+      std::lock_guard<std::mutex> lock(m);
+      if (!first_error) first_error = std::current_exception();
+    }
     std::lock_guard<std::mutex> lock(m);
     if (--running == 0) finished.notify_all();
   };
@@ -40,6 +50,7 @@ int for_each_row(int rows, int threads, const std::function<void(int, int)>& row
     poll();
   }
   for (std::thread& t : pool) t.join();
+  if (first_error) std::rethrow_exception(first_error);
   return threads;
 }
 

@@ -9,8 +9,9 @@ namespace glasspiv {
 // Calls row_fn(row, thread) once for every row in [0, rows), thread in
 // [0, used threads), on `threads` threads (<= 0: hardware concurrency; never
 // more than rows). While they run, the calling thread calls poll (if set)
-// about every 50 ms and once at the end. row_fn must not throw. Returns the
-// number of threads used.
+// about every 50 ms and once at the end. If row_fn throws, no further row is
+// started and the first exception is rethrown on the calling thread once the
+// workers have stopped. Returns the number of threads used.
 int for_each_row(int rows, int threads, const std::function<void(int row, int thread)>& row_fn,
                  const std::function<void()>& poll = {});
 

@@ -20,6 +20,11 @@ void require(bool ok, const char* field, const std::string& problem) {
   if (!ok) throw std::invalid_argument(fmt::format("piv experiment: {} {}", field, problem));
 }
 
+// A setting's (or the flow's) fault: the message names the value, not this code.
+void require_setting(bool ok, const char* setting, const std::string& problem) {
+  if (!ok) throw ExperimentSettingError(setting, problem);
+}
+
 // SplitMix64 (Steele et al. 2014): independent noise seeds per frame from one seed.
 std::uint64_t mix_seed(std::uint64_t seed, std::uint64_t stream) {
   std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (stream + 1);
@@ -123,16 +128,17 @@ void crossing_reach(const TransportMap& map, double* s_mm, double* t_mm) {
 }  // namespace
 
 void PivExperimentSettings::check() const {
-  require(std::isfinite(dt_s) && dt_s > 0, "dt_s", "must be a positive number of seconds");
-  require(std::isfinite(time_a_s), "time_a_s", "must be finite");
-  require(std::isfinite(density_ppp) && density_ppp > 0, "density_ppp", "must be positive");
-  require(std::isfinite(particle_px) && particle_px > 0, "particle_px", "must be positive");
-  require(std::isfinite(peak_radiance) && peak_radiance > 0, "peak_radiance", "must be positive");
-  require(rk4_sub_steps >= 1, "rk4_sub_steps", "must be at least 1");
-  require(std::isfinite(texels_per_px) && texels_per_px >= 1, "texels_per_px", "must be at least 1");
-  require(std::isfinite(max_texels) && max_texels >= 1, "max_texels", "must be at least 1");
-  require(samples_per_axis >= 1, "samples_per_axis", "must be at least 1");
-  require(std::isfinite(sheet_truth_step_px) && sheet_truth_step_px > 0, "sheet_truth_step_px", "must be positive");
+  require_setting(std::isfinite(dt_s) && dt_s > 0, "dt_s", fmt::format("{} s must be a positive number of seconds", dt_s));
+  require_setting(std::isfinite(time_a_s), "time_a_s", "must be finite");
+  require_setting(std::isfinite(density_ppp) && density_ppp > 0, "density_ppp", "must be positive");
+  require_setting(std::isfinite(particle_px) && particle_px > 0, "particle_px", "must be positive");
+  require_setting(std::isfinite(peak_radiance) && peak_radiance > 0, "peak_radiance", "must be positive");
+  require_setting(rk4_sub_steps >= 1, "rk4_sub_steps", "must be at least 1");
+  require_setting(std::isfinite(texels_per_px) && texels_per_px >= 1, "texels_per_px", "must be at least 1");
+  require_setting(std::isfinite(max_texels) && max_texels >= 1, "max_texels", "must be at least 1");
+  require_setting(samples_per_axis >= 1, "samples_per_axis", "must be at least 1");
+  require_setting(std::isfinite(sheet_truth_step_px) && sheet_truth_step_px > 0, "sheet_truth_step_px",
+                  "must be positive");
   sensor.check();
 }
 
@@ -193,14 +199,33 @@ PivExperiment simulate_piv_experiment(const TraceScene& scene, const Sheet& shee
     for (int j = 0; j <= 20; ++j) {
       const Eigen::Vector3d p =
           sheet_point_mm(plane, (i / 20.0 - 0.5) * plane.extent_s_mm, (j / 20.0 - 0.5) * plane.extent_t_mm);
-      top_speed = std::max(top_speed, flow.velocity_m_per_s(p, mid_s).norm());
+      top_speed = std::max(top_speed, flow.velocity_m_per_s(p, mid_s).stableNorm());  // 1e300 m/s does not overflow
     }
+  // A flow and pulse separation that carry tracers across the whole sheet
+  // between the frames make no PIV pair (and a seeding slab beyond any scene).
+  require_setting(std::isfinite(top_speed), "flow", "the flow's speed on the sheet is not finite");
+  const double reach_mm = 1000 * top_speed * settings.dt_s;
+  const double sheet_mm = std::max(plane.extent_s_mm, plane.extent_t_mm);
+  require_setting(reach_mm <= sheet_mm, "dt_s",
+                  fmt::format("with the flow's top speed on the sheet, {:.4g} m/s, tracers move {:.4g} mm in {:.4g} s, "
+                              "more than the sheet's extent ({:.4g} mm): shorten the pulse separation or check the flow",
+                              top_speed, reach_mm, settings.dt_s, sheet_mm));
   TracerSeeding seeding;
   seeding.per_mm3 = out.tracers_per_mm3;
-  seeding.margin_mm = 1.5 * 1000 * top_speed * settings.dt_s + 2 * out.particle_diameter_mm;
+  seeding.margin_mm = 1.5 * reach_mm + 2 * out.particle_diameter_mm;
   seeding.seed = settings.seed;
+  {
+    const double volume_mm3 = (sheet.extent_mm[0] + 2 * seeding.margin_mm) * (sheet.extent_mm[1] + 2 * seeding.margin_mm) *
+                              2 * seeding.half_depth_sigmas * sheet.sigma_mm();
+    const double expected = seeding.per_mm3 * volume_mm3;
+    require_setting(std::isfinite(expected) && expected <= kMaxTracers, "density_ppp",
+                    fmt::format("{:.4g} tracers per px ask for {:.4g} tracers in the sheet's slab, over the limit of "
+                                "{:.4g}", settings.density_ppp, expected, kMaxTracers));
+  }
   const TracerFrames frames = advect_tracers(flow, seed_tracers_mm(sheet, seeding, solids), settings.time_a_s,
                                              settings.dt_s, settings.rk4_sub_steps);
+  for (const Eigen::Vector3d& p : frames.frame_b_mm)
+    require_setting(p.allFinite(), "flow", "carries a tracer to a non-finite position between the frames");
   out.tracers = frames.frame_a_mm.size();
   report(0.55);
 

@@ -22,7 +22,9 @@
 // order in the velocity gradient.
 #include <cstdint>
 #include <functional>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -78,8 +80,21 @@ struct PivExperimentSettings {
   bool keep_maps = false;    // keep each camera's transport maps in the result
   int threads = 0;           // <= 0: all cores
 
-  // std::invalid_argument naming the field ("dt_s", "density_ppp", ...).
+  // ExperimentSettingError naming the field ("dt_s", "density_ppp", ...).
   void check() const;
+};
+
+// A setting of the experiment, or the flow, that cannot be simulated: `setting`
+// names the PivExperimentSettings field ("dt_s", "density_ppp", ...) or "flow",
+// so that a command can name its own option instead of the scene.
+class ExperimentSettingError : public std::invalid_argument {
+ public:
+  ExperimentSettingError(std::string setting, const std::string& problem)
+      : std::invalid_argument(problem), setting_(std::move(setting)) {}
+  const std::string& setting() const { return setting_; }
+
+ private:
+  std::string setting_;
 };
 
 // The true displacement of frame B relative to frame A on one camera's
@@ -125,8 +140,12 @@ struct PivExperiment {
 
 // Runs the experiment for every camera. progress (optional) gets the fraction
 // done in [0, 1] from the calling thread; it must not throw. Throws
-// std::invalid_argument for bad settings or no cameras, and when the first
-// camera does not see the sheet with the glass removed.
+// ExperimentSettingError for bad settings, for a flow whose speed on the sheet
+// is not finite or moves tracers farther than the sheet's larger extent between
+// the frames ("dt_s": shorten it, or check the flow), and for a flow that
+// carries a tracer to a non-finite position ("flow"); std::invalid_argument for
+// no cameras and when the first camera does not see the sheet with the glass
+// removed.
 PivExperiment simulate_piv_experiment(const TraceScene& scene, const Sheet& sheet,
                                       const std::vector<ExperimentCamera>& cameras, const Flow& flow,
                                       const PivExperimentSettings& settings,

@@ -21,6 +21,12 @@ class vtkStaticCellLocator;
 
 namespace glasspiv {
 
+// What a flow file may declare, checked before VTK allocates (docs/limits.md):
+// points, cells and the values of any one section; and, in a legacy file, all
+// its values together as doubles.
+constexpr long long kMaxVtkFlowItems = 50'000'000;
+constexpr long long kMaxVtkFlowBytes = 2LL << 30;
+
 struct VtkFlowOptions {
   // The velocity array: "" picks a point-data array named U, velocity or Velocity,
   // else the only 3-component point-data array, else the same among the cell data.
@@ -52,9 +58,16 @@ class VtkFlow final : public Flow {
   vtkStaticCellLocator* locator_ = nullptr;
 };
 
-// Reads the file (by its extension: .vti, .vtu, .vtk). Throws InputError(path,
-// field, problem) when it cannot be read, holds no cells, has no (or no such)
-// 3-component velocity array, or any velocity component is NaN or infinite.
+// Reads the file (by its extension: .vti, .vtu, .vtk). Before VTK reads it, the
+// sizes it declares are checked against the limits above, and a legacy file is
+// walked section by section: every data section must hold its declared values
+// (binary: within the file's bytes; ASCII: that many finite numbers), so a
+// truncated file, a short section or a 'nan' is refused instead of read as
+// memory VTK never filled. VTK's own messages are kept off the terminal: its
+// first error becomes the problem. Throws InputError(path, field, problem) when
+// it cannot be read, declares more than the limits, holds no cells, has no (or
+// no such) 3-component velocity array, an array shorter than its points or
+// cells, or any point coordinate or velocity component NaN or infinite.
 std::shared_ptr<const VtkFlow> read_vtk_flow(const std::string& path, const VtkFlowOptions& options = {});
 
 // Throws InputError(flow.file(), array, ...) unless the field covers the slab

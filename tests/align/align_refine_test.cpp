@@ -75,6 +75,8 @@ TEST(AlignRefine, AStartOffByTwoMillimetresAndOneDegreeReturnsToTheTruth) {
   EXPECT_LT(position_mm, 0.1);
   EXPECT_LT(rotation_deg, 0.01);
   EXPECT_GT(r.levels.back().gradient_ncc_after, r.levels.front().gradient_ncc_before);
+  EXPECT_EQ(r.status, RefineStatus::improved);
+  EXPECT_GT(r.score_end, r.score_start);
 }
 
 TEST(AlignRefine, WithTheFiducialCornersTheStartReturnsWithinFiftyMicrons) {
@@ -103,6 +105,38 @@ TEST(AlignRefine, WithTheFiducialCornersTheStartReturnsWithinFiftyMicrons) {
   EXPECT_LT(position_mm, kSanitizedBuild ? 0.5 : 0.05);
   EXPECT_LT(rotation_deg, kSanitizedBuild ? 0.05 : 0.01);
   EXPECT_EQ(r.levels.back().corners_lost, 0);
+  EXPECT_EQ(r.status, RefineStatus::improved);
+}
+
+// A start that cannot be refined is reported, not returned as a pose: a camera
+// turned away from the setup takes no step (its renders show nothing), and a
+// start far off ends where the score is lower than at the start.
+TEST(AlignRefine, AStartThatCannotBeRefinedIsReportedAsSuch) {
+  TempDir dir("align_refine");
+  MarkerSetupOptions setup;
+  setup.width_px = 320;
+  setup.height_px = 256;
+  setup.focal_px = 625;
+  setup.marker_size_mm = 12;
+  const SetupPhoto s = photograph(dir.file("setup"), setup);
+  RefineOptions options;
+  options.binning_levels = {8, 4};
+  options.max_iterations = 10;
+  const RigidTransform away =
+      RigidTransform::from_rvec_tvec(Eigen::Vector3d(0, M_PI, 0), Eigen::Vector3d::Zero()) * s.truth;
+  const RefineResult r = refine_alignment(s.ps.trace, s.look, s.ps.camera().model, away, s.photo, {}, options);
+  std::printf("turned away: %d successful steps, score %.4f -> %.4f\n", r.successful_steps, r.score_start,
+              r.score_end);
+  EXPECT_EQ(r.status, RefineStatus::no_step);
+  EXPECT_EQ(r.score_start, 0);  // a render of nothing: no edges to correlate
+  // A start 100 mm off across the view: the objective pulls it on to where the
+  // score is lower (measured -0.0867 -> -0.0948), which is reported as worse.
+  const RigidTransform far =
+      RigidTransform::from_rvec_tvec(Eigen::Vector3d::Zero(), Eigen::Vector3d(100, 60, 0)) * s.truth;
+  const RefineResult f = refine_alignment(s.ps.trace, s.look, s.ps.camera().model, far, s.photo, {}, options);
+  std::printf("100 mm off: %d successful steps, score %.4f -> %.4f\n", f.successful_steps, f.score_start, f.score_end);
+  EXPECT_EQ(f.status, RefineStatus::worse);
+  EXPECT_LT(f.score_end, f.score_start);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "render/scene.h"
 #include "render/trace_scene_builder.h"
@@ -169,6 +170,82 @@ TEST(Sensitivity, RejectsBadInput) {
   ModelTolerances cov;
   cov.pose_covariance = -Eigen::Matrix<double, 6, 6>::Identity();
   EXPECT_THROW(model_sensitivity(scene, model, RigidTransform{}, cov, 0, 0), std::invalid_argument);
+}
+
+// The refusal's tolerance and a phrase of its message.
+void expect_refused(const TraceScene& scene, const CameraModel& model, const RigidTransform& pose,
+                    const ModelTolerances& tol, const std::string& tolerance, const std::string& problem_has,
+                    int samples = 0) {
+  SensitivityOptions options;
+  if (samples > 0) options.method = SensitivityMethod::monte_carlo;
+  try {
+    model_sensitivity(scene, model, pose, tol, samples, 1, options);
+    ADD_FAILURE() << "no error for " << tolerance;
+  } catch (const SensitivityError& e) {
+    EXPECT_EQ(e.tolerance(), tolerance) << e.what();
+    EXPECT_NE(std::string(e.what()).find(problem_has), std::string::npos) << e.what();
+  }
+}
+
+// Perturbed models must be scenes the tracer may trace: an index perturbation
+// that takes the glass below 0.5 (refract_with_fresnel asserted n > 0 at -1
+// sigma of --index 2), a diameter perturbation that makes a sphere vanish, a
+// glass shift into an opaque solid, touching spheres grown into each other,
+// and a rotation tolerance of no meaning are refused before any trace.
+TEST(Sensitivity, InvalidPerturbedModelsAreRefusedNamingTheTolerance) {
+  TraceScene scene = ball_lens_scene();
+  const CameraModel model(32, 24, 60, 60, 15.5, 11.5);
+  const RigidTransform pose = camera_from_world_look_at(Vector3d(0, 0, -100), Vector3d(0, 0, 300), Vector3d(0, -1, 0));
+  ModelTolerances tol = none();
+  tol.refractive_index = 2;
+  expect_refused(scene, model, pose, tol, "refractive_index", "refractive index");
+  tol.refractive_index = 0.4;  // 1.12 to 1.92: a valid model, measured
+  EXPECT_GT(model_sensitivity(scene, model, pose, tol, 0, 0).valid_points, 0);
+  tol = none();
+  tol.sphere_diameter_mm = 50;  // -1 sigma: -10 mm across
+  expect_refused(scene, model, pose, tol, "sphere_diameter_mm", "mm across");
+  tol = none();
+  tol.camera_rotation_deg = 1e300;
+  expect_refused(scene, model, pose, tol, "camera_rotation_deg", "deg");
+  tol = none();
+  tol.camera_position_mm = 2e6;
+  expect_refused(scene, model, pose, tol, "camera_position_mm", "beyond");
+
+  // An opaque sphere 5 mm beside the ball lens: a 10 mm glass shift runs into it.
+  scene.solids.push_back({Sphere{Vector3d(0, 45, 250), 20}, TraceMaterial::opaque(0.5)});
+  tol = none();
+  tol.glass_position_mm = 10;
+  expect_refused(scene, model, pose, tol, "glass_position_mm", "overlap");
+  tol.glass_position_mm = 1;
+  EXPECT_GT(model_sensitivity(scene, model, pose, tol, 0, 0).valid_points, 0);
+  // Monte Carlo draws are checked too: 4 mm 1-sigma reaches the 5 mm gap in some of 64 draws.
+  tol.glass_position_mm = 4;
+  expect_refused(scene, model, pose, tol, "", "Monte Carlo draw", 64);
+
+  // Two touching glass spheres: a small diameter change is a contact, a large one an overlap.
+  TraceScene pair;
+  pair.sheet = sheet_z(300, 400);
+  pair.solids.push_back({Sphere{Vector3d(-20, 0, 250), 20}, TraceMaterial::glass(kNBk7)});
+  pair.solids.push_back({Sphere{Vector3d(20, 0, 250), 20}, TraceMaterial::glass(kNBk7)});
+  tol = none();
+  tol.sphere_diameter_mm = 0.02;
+  EXPECT_GT(model_sensitivity(pair, model, pose, tol, 0, 0).valid_points, 0);
+  tol.sphere_diameter_mm = 1;  // 2.5 % of 40 mm
+  expect_refused(pair, model, pose, tol, "sphere_diameter_mm", "overlap");
+}
+
+// Nothing to measure is refused, not a table of zeros: every tolerance 0, a
+// camera that sees no sheet, tolerances so large that no point keeps its view.
+TEST(Sensitivity, NothingToMeasureIsRefused) {
+  const TraceScene scene = ball_lens_scene();
+  const CameraModel model(32, 24, 60, 60, 15.5, 11.5);
+  const RigidTransform pose = camera_from_world_look_at(Vector3d(0, 0, -100), Vector3d(0, 0, 300), Vector3d(0, -1, 0));
+  expect_refused(scene, model, pose, none(), "", "every tolerance is 0");
+  const RigidTransform away = camera_from_world_look_at(Vector3d(0, 0, -100), Vector3d(0, 0, -300), Vector3d(0, -1, 0));
+  expect_refused(scene, model, away, ModelTolerances{}, "", "sees the sheet directly");
+  ModelTolerances tol = none();
+  tol.camera_position_mm = 5e4;  // the sheet is 400 mm wide
+  expect_refused(scene, model, pose, tol, "camera_position_mm", "none keeps its view");
 }
 
 void print_table(const char* what, const SensitivityMap& m, double seconds) {

@@ -361,6 +361,32 @@ expect_ok "$glasspiv" align refine "$al/posed.yaml" "$work/al/photo.png" --binni
   --scene-out "$al/refined.yaml"
 expect_ok "$glasspiv" align sensitivity "$al/posed.yaml" --binning 4 -o "$work/al/sens.png" \
   --pose-json "$work/al/pose.json" --step-px 32
+# Refused in one line, exit 2, nothing written: a photo given twice (or a
+# copy) to align pose; sensitivities with nothing to measure or perturbed
+# models that are no scene (an index below 0.5 asserted in the optics, a
+# rotation tolerance of 1e300 deg ended in std::terminate from a worker); a
+# refinement from a camera turned away from the setup.
+cp "$work/al/photo.png" "$work/al/copy.png"
+expect_error 2 "photo.png" "same file as" -- "$glasspiv" align pose "$al/posed.yaml" "$work/al/photo.png" \
+  "$work/al/photo.png" --binning 4 --json "$work/al/dup.json"
+expect_error 2 "copy.png" "same bytes as" -- "$glasspiv" align pose "$al/posed.yaml" "$work/al/photo.png" \
+  "$work/al/copy.png" --binning 4 --json "$work/al/dup.json"
+[ ! -e "$work/al/dup.json" ] && ok || fail "a refused align pose wrote its JSON"
+expect_error 2 "--index" "refractive index" -- "$glasspiv" align sensitivity "$reactor" -o "$work/sx.png" \
+  --step-px 64 --index 2
+expect_error 2 "--camera-deg" -- "$glasspiv" align sensitivity "$reactor" -o "$work/sx.png" --step-px 64 \
+  --camera-deg 1e300
+expect_error 2 "--diameter-mm" "mm across" -- "$glasspiv" align sensitivity "$reactor" -o "$work/sx.png" \
+  --step-px 64 --diameter-mm 100
+expect_error 2 "every tolerance is 0" -- "$glasspiv" align sensitivity "$reactor" -o "$work/sx.png" --step-px 64 \
+  --camera-mm 0 --camera-deg 0 --glass-mm 0 --diameter-mm 0 --index 0
+sed 's/rvec: \[[^]]*\]/rvec: [0, 3.14159, 0]/' "$al/posed.yaml" >"$al/away.yaml"
+expect_error 2 "away.yaml" "sees the sheet directly" -- "$glasspiv" align sensitivity "$al/away.yaml" --binning 4 \
+  -o "$work/sx.png" --step-px 32
+[ ! -e "$work/sx.png" ] && ok || fail "a refused sensitivity wrote its map"
+expect_error 2 "away.yaml" "took no step" "nothing written" -- "$glasspiv" align refine "$al/away.yaml" \
+  "$work/al/photo.png" --binning 4 --levels 8 --scene-out "$al/away_refined.yaml" --json "$work/al/away.json"
+[ ! -e "$al/away_refined.yaml" ] && [ ! -e "$work/al/away.json" ] && ok || fail "a failed refinement wrote its pose"
 cmp -s "$src/data/scenes/reactor_markers.yaml" "$al/reactor_markers.yaml" && ok || fail "align changed its input scene"
 
 echo "$passed passed, $failed failed"

@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <functional>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -47,6 +50,34 @@ TEST(ParallelRows, RunsWithoutProgress) {
   std::atomic<long> sum{0};
   EXPECT_EQ(parallel_rows(1000, 2, [&](int row) { sum.fetch_add(row); }), 2);
   EXPECT_EQ(sum.load(), 999L * 1000 / 2);
+}
+
+// A row that throws: the exception reaches the caller (not std::terminate from
+// a worker thread), after every worker has stopped, whatever the thread count
+// and whether progress is reported; several rows throwing at once give one.
+TEST(ParallelRows, ExceptionFromARowReachesTheCaller) {
+  for (int threads : {1, 2, 8})
+    for (bool with_progress : {false, true}) {
+      SCOPED_TRACE(testing::Message() << threads << " threads, progress " << with_progress);
+      std::atomic<int> running{0};
+      std::function<void(int, int)> progress;
+      if (with_progress) progress = [](int, int) {};
+      try {
+        parallel_rows(
+            200, threads,
+            [&](int row) {
+              running.fetch_add(1);
+              std::this_thread::sleep_for(std::chrono::microseconds(200));
+              running.fetch_sub(1);
+              if (row >= 20) throw std::runtime_error("row " + std::to_string(row));
+            },
+            progress);
+        ADD_FAILURE() << "no exception";
+      } catch (const std::runtime_error& e) {
+        EXPECT_EQ(std::string(e.what()).rfind("row ", 0), 0u);
+      }
+      EXPECT_EQ(running.load(), 0);
+    }
 }
 
 }  // namespace

@@ -46,6 +46,35 @@ has err.txt "nan.vtk"; one_line; nothing_in bad
 vtk_field -0.01 0.02 '\0\0\0\0\0\0\0\0' >small.vtk
 expect 2 "$G" simulate "$S" --flow vtk:small.vtk --binning 8 -o bad
 has err.txt "small.vtk"; one_line; nothing_in bad
+# Damaged VTK files are refused from what they declare, one line and none of
+# VTK's own report (no escape bytes), before VTK reads memory it never filled:
+# a binary file cut short, an ASCII one a vector short, a literal nan, and 9 KB
+# that declare 2.5e8 points (6 GB).
+quiet_refusal() {  # FILE PHRASE
+  expect 2 "$G" simulate "$S" --flow "vtk:$1" --binning 8 -o bad
+  has err.txt "$1"; has err.txt "$2"; one_line; nothing_in bad
+  if LC_ALL=C grep -q "$(printf '\033')" err.txt; then fail "escape bytes on stderr"; fi
+}
+vtk_field -1 2 '\0\0\0\0\0\0\0\0' | head -c 300 >cut.vtk
+quiet_refusal cut.vtk "bytes are left"
+ascii_field() {  # the header of an ASCII field of 2 x 2 x 2 points, then stdin as its data
+  printf '# vtk DataFile Version 3.0\nfield\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\nORIGIN -1 -1 -1\nSPACING 2 2 2\nPOINT_DATA 8\nVECTORS U double\n'
+  cat
+}
+printf '0 0 0\n%.0s' $(seq 7) | ascii_field >short_ascii.vtk
+quiet_refusal short_ascii.vtk "ends after 21 of its 24 values"
+{ printf '0 0 0\n%.0s' $(seq 7); printf '0 nan 0\n'; } | ascii_field >nan_ascii.vtk
+quiet_refusal nan_ascii.vtk "not a finite number"
+{ printf '# vtk DataFile Version 3.0\nhuge\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 250000000 float\n'; head -c 9000 /dev/zero; } >huge.vtk
+quiet_refusal huge.vtk "over the limit"
+{ printf '# vtk DataFile Version 3.0\nlarge\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 1000000 float\n'; head -c 9000 /dev/zero; } >large.vtk
+quiet_refusal large.vtk "bytes are left"
+# A pulse separation or a flow that carries tracers across the whole sheet names
+# the option, not the scene.
+expect 2 "$G" simulate "$S" --flow uniform:1,0,0 --dt-s 1e300 --binning 8 -o bad
+has err.txt "--dt-s"; has err.txt "more than the sheet's extent"; one_line; nothing_in bad
+expect 2 "$G" simulate "$S" --flow uniform:1e300,0,0 --binning 8 -o bad
+has err.txt "--dt-s"; has err.txt "1e+300 m/s"; one_line; nothing_in bad
 vtk_field -1 2 '\0\0\0\0\0\0\0\0' >still.vtk
 expect 0 "$G" simulate "$S" --flow vtk:still.vtk --binning 8 -o still
 [ -s still/metadata.json ] || fail "vtk:still.vtk wrote no metadata.json"

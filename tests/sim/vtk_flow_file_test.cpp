@@ -9,8 +9,18 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <vector>
 
 #include <gtest/gtest.h>
+
+#include <vtkCellType.h>
+#include <vtkDataSetWriter.h>
+#include <vtkDoubleArray.h>
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkUnstructuredGrid.h>
 
 #include "tests/temp_dir.h"
 #include "util/input_error.h"
@@ -226,6 +236,170 @@ TEST(VtkFlowFile, FieldNotCoveringTheSheetIsRefused) {
                                        Eigen::Vector3d(5 - 1e-3, 30, 30)}};
   EXPECT_THROW(check_covers_slab(*flow, sheet, 1.5, 4, SolidInteriors()), InputError);
   check_covers_slab(*flow, sheet, 1.5, 4, SolidInteriors(wall));
+}
+
+// The value a refusal must not be: a read that exits normally, or any text
+// VTK itself prints. Each file is refused with one InputError naming it and
+// nothing on stderr (VTK's output window and logger are silenced).
+void expect_refused_quietly(const std::string& path, const std::string& problem_has) {
+  testing::internal::CaptureStderr();
+  try {
+    read_vtk_flow(path);
+    ADD_FAILURE() << path << ": no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_NE(e.problem().find(problem_has), std::string::npos) << e.problem();
+    for (char c : std::string(e.what())) EXPECT_TRUE(c >= 0x20 && c < 0x7f) << "byte " << int(c) << " in " << e.what();
+  }
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+}
+
+// Big-endian doubles, as legacy binary files hold them.
+std::string big_endian(const std::vector<double>& values) {
+  std::string out;
+  for (double v : values) {
+    unsigned char bytes[8];
+    std::memcpy(bytes, &v, 8);
+    for (int b = 7; b >= 0; --b) out.push_back(static_cast<char>(bytes[b]));
+  }
+  return out;
+}
+
+// Truncated files and short data sections: VTK's legacy reader would leave the
+// missing values as memory it never filled (valgrind: uninitialised reads) and
+// use them as velocities; the declared sizes are checked against the file first.
+TEST(VtkFlowFile, TruncatedOrShortDataIsRefusedBeforeVtkReadsIt) {
+  TempDir dir("sim_vtk");
+  const int n = kDims[0] * kDims[1] * kDims[2];
+  std::string binary = legacy_header();
+  binary.replace(binary.find("ASCII"), 5, "BINARY");
+  const std::string all = big_endian(std::vector<double>(3 * static_cast<std::size_t>(n), 0.25));
+  // Binary: the last vector cut off, and the file cut in the middle of a value.
+  write(dir.file("short.vtk"), binary + "VECTORS U double\n" + all.substr(0, all.size() - 24) + "\n");
+  expect_refused_quietly(dir.file("short.vtk"), "bytes are left");
+  write(dir.file("cut.vtk"), binary + "VECTORS U double\n" + all.substr(0, all.size() / 2 + 3));
+  expect_refused_quietly(dir.file("cut.vtk"), "bytes are left");
+  // A short binary section followed by another section: the walk lands in the data.
+  write(dir.file("shifted.vtk"), binary + "VECTORS U double\n" + all.substr(0, all.size() - 48) + "\nSCALARS p double 1\n");
+  expect_refused_quietly(dir.file("shifted.vtk"), "");
+  // ASCII: two values missing, the file cut after a few lines.
+  std::string values = grid_values();
+  const std::size_t last_line = values.find_last_of('\n', values.size() - 2);
+  write(dir.file("short_ascii.vtk"), legacy_header() + "VECTORS U double\n" + values.substr(0, last_line) + " 1\n");
+  expect_refused_quietly(dir.file("short_ascii.vtk"), "ends after");
+  write(dir.file("cut_ascii.vtk"), legacy_header() + "VECTORS U double\n" + values.substr(0, 100));
+  expect_refused_quietly(dir.file("cut_ascii.vtk"), "ends after");
+}
+
+// A literal nan (or any word that is not a finite number) in an ASCII section.
+TEST(VtkFlowFile, AsciiNanOrWordIsRefusedNamingTheSection) {
+  TempDir dir("sim_vtk");
+  std::string values = grid_values();
+  for (const std::string bad : {"nan", "-inf", "1e999", "x", "0x1p3"}) {
+    std::string v = values;
+    v.replace(v.find(' '), 0, " " + bad);  // one value more in the first line, the rest shifted
+    v = v.substr(0, v.rfind(' '));         // and one less at the end: the count is right
+    const std::string path = dir.file("bad.vtk");
+    write(path, legacy_header() + "VECTORS U double\n" + v + "\n");
+    testing::internal::CaptureStderr();
+    try {
+      read_vtk_flow(path);
+      ADD_FAILURE() << bad << ": no error";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.field(), "VECTORS U") << e.what();
+      EXPECT_NE(e.problem().find("not a finite number"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+  }
+}
+
+// A 9 KB file that declares 2.5e8 points (6 GB as VTK reads it): refused from its header, before VTK
+// allocates gigabytes; and one that declares more than the limit outright.
+TEST(VtkFlowFile, DeclaredSizesAreCheckedBeforeAllocating) {
+  TempDir dir("sim_vtk");
+  const std::string points_header =
+      "# vtk DataFile Version 3.0\nhuge\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 250000000 float\n";
+  write(dir.file("huge.vtk"), points_header + std::string(9000, '\0'));
+  expect_refused_quietly(dir.file("huge.vtk"), "over the limit");
+  write(dir.file("large.vtk"), "# vtk DataFile Version 3.0\nlarge\nBINARY\nDATASET UNSTRUCTURED_GRID\n"
+                               "POINTS 1000000 float\n" + std::string(9000, '\0'));
+  expect_refused_quietly(dir.file("large.vtk"), "12000000 bytes) but 9000 bytes are left");
+  write(dir.file("over.vtk"), "# vtk DataFile Version 3.0\nhuge\nBINARY\nDATASET STRUCTURED_POINTS\n"
+                              "DIMENSIONS 100000 100000 100000\nORIGIN 0 0 0\nSPACING 1 1 1\nPOINT_DATA 8\n");
+  expect_refused_quietly(dir.file("over.vtk"), "limit");
+  write(dir.file("over.vti"),
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+        "<ImageData WholeExtent=\"0 99999 0 99999 0 99999\" Origin=\"0 0 0\" Spacing=\"1 1 1\">\n"
+        "<Piece Extent=\"0 99999 0 99999 0 99999\">\n<PointData Vectors=\"U\">\n"
+        "<DataArray type=\"Float64\" Name=\"U\" NumberOfComponents=\"3\" format=\"ascii\">\n0 0 0\n"
+        "</DataArray>\n</PointData>\n</Piece>\n</ImageData>\n</VTKFile>\n");
+  expect_refused_quietly(dir.file("over.vti"), "limit");
+}
+
+// VTK's own errors (an XML file cut short) become the one InputError; nothing
+// of VTK's coloured, multi-line report reaches stderr.
+TEST(VtkFlowFile, VtkErrorsBecomeOneLineAndStderrStaysQuiet) {
+  TempDir dir("sim_vtk");
+  const std::string vti = vti_file();
+  write(dir.file("cut.vti"), vti.substr(0, vti.size() / 2) + "\x1b[31m\x01");
+  expect_refused_quietly(dir.file("cut.vti"), "");
+}
+
+// What VTK itself writes passes the section walk: legacy ASCII and binary, an
+// unstructured grid (VTK 5 OFFSETS and CONNECTIVITY, CELL_TYPES, metadata) with
+// two point arrays and image data, read back to the written velocities.
+TEST(VtkFlowFile, FilesVtkWritesAreRead) {
+  TempDir dir("sim_vtk");
+  vtkNew<vtkUnstructuredGrid> grid;
+  vtkNew<vtkPoints> points;
+  const double h = 0.02;
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(h, 0, 0), Eigen::Vector3d(0, h, 0),
+                                   Eigen::Vector3d(0, 0, h)})
+    points->InsertNextPoint(p.x(), p.y(), p.z());
+  grid->SetPoints(points);
+  const vtkIdType tet[4] = {0, 1, 2, 3};
+  grid->InsertNextCell(VTK_TETRA, 4, tet);
+  vtkNew<vtkDoubleArray> u, p;
+  u->SetName("U");
+  u->SetNumberOfComponents(3);
+  p->SetName("p");
+  for (vtkIdType i = 0; i < 4; ++i) {
+    double x[3];
+    points->GetPoint(i, x);
+    const Eigen::Vector3d v = linear_field(Eigen::Vector3d(x[0], x[1], x[2]));
+    u->InsertNextTuple3(v.x(), v.y(), v.z());
+    p->InsertNextValue(1.5 * static_cast<double>(i));
+  }
+  grid->GetPointData()->AddArray(u);
+  grid->GetPointData()->AddArray(p);
+  vtkNew<vtkImageData> image;
+  image->SetDimensions(kDims[0], kDims[1], kDims[2]);
+  image->SetOrigin(kOrigin_m.x(), kOrigin_m.y(), kOrigin_m.z());
+  image->SetSpacing(kSpacing_m.x(), kSpacing_m.y(), kSpacing_m.z());
+  vtkNew<vtkDoubleArray> w;
+  w->SetName("velocity");
+  w->SetNumberOfComponents(3);
+  for (int k = 0; k < kDims[2]; ++k)
+    for (int j = 0; j < kDims[1]; ++j)
+      for (int i = 0; i < kDims[0]; ++i) {
+        const Eigen::Vector3d v = linear_field(grid_point_m(i, j, k));
+        w->InsertNextTuple3(v.x(), v.y(), v.z());
+      }
+  image->GetPointData()->AddArray(w);
+  for (bool binary : {false, true})
+    for (vtkDataSet* data : {static_cast<vtkDataSet*>(grid.GetPointer()), static_cast<vtkDataSet*>(image.GetPointer())}) {
+      const std::string path = dir.file(std::string(binary ? "binary_" : "ascii_") + data->GetClassName() + ".vtk");
+      vtkNew<vtkDataSetWriter> writer;
+      writer->SetInputData(data);
+      writer->SetFileName(path.c_str());
+      if (binary) writer->SetFileTypeToBinary();
+      ASSERT_EQ(writer->Write(), 1) << path;
+      const auto flow = read_vtk_flow(path);
+      const Eigen::Vector3d at_m = data == grid.GetPointer() ? Eigen::Vector3d(0.004, 0.005, 0.006)
+                                                              : grid_point_m(2, 1, 1) + 0.3 * kSpacing_m;
+      const Eigen::Vector3d v = flow->velocity_m_per_s(1000 * at_m, 0);
+      EXPECT_LT((v - linear_field(at_m)).norm(), 1e-9) << path;
+    }
 }
 
 }  // namespace

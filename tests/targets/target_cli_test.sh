@@ -83,7 +83,10 @@ has err.txt "bad.yaml: field 'marker_size_mm'"
 
 # --- calib detect
 expect 0 "$G" target print "$D/charuco_11x8_15mm.yaml" --png a.png --dpi 150
+# c.png: the same picture with a byte after the PNG's end, a file of its own
+# (an exact copy is refused below: one photo is one view).
 cp a.png c.png
+printf '\0' >>c.png
 expect 0 "$G" calib detect a.png c.png --target "$D/charuco_11x8_15mm.yaml" -o obs.yaml --vnl corners.vnl \
   --overlay-dir overlays
 has out.txt "a.png: 70 of 70 corners, 44 markers"
@@ -94,6 +97,20 @@ has corners.vnl "# filename x y level"
 [ -s overlays/a_corners.png ] && [ -s overlays/c_corners.png ] || fail "overlays missing"
 expect 0 "$G" calib detect a.png --target "$D/charuco_11x8_15mm.yaml" -o obs.json
 has obs.json '"glasspiv_observations": 1'
+
+# The same photo twice is one view, whichever way it is named: refused before any detection.
+mkdir -p photos
+cp a.png photos/a.png
+cp a.png photos/copy.png
+expect 2 "$G" calib detect photos --target "$D/charuco_11x8_15mm.yaml" -o obs_dup.yaml
+has err.txt "photos/copy.png: has the same bytes as 'photos/a.png'"; one_line
+rm photos/copy.png
+expect 2 "$G" calib detect photos photos/a.png --target "$D/charuco_11x8_15mm.yaml" -o obs_dup.yaml
+has err.txt "photos/a.png: is the same file as 'photos/a.png'"; one_line
+ln -s photos/a.png link.png
+expect 2 "$G" calib detect link.png photos --target "$D/charuco_11x8_15mm.yaml" -o obs_dup.yaml
+has err.txt "is the same file as 'link.png'"; one_line
+[ ! -e obs_dup.yaml ] || fail "a refused detection wrote obs_dup.yaml"
 
 expect 0 "$G" target print "$D/charuco_11x8_15mm.yaml" --png small.png --dpi 100
 expect 2 "$G" calib detect a.png small.png --target "$D/charuco_11x8_15mm.yaml" -o obs.yaml
