@@ -52,8 +52,10 @@ struct Model {
   std::vector<double> focal_scale;
 };
 
-Model apply(const TraceScene& drawing, const std::vector<PlatePhoto>& photos, const std::vector<Param>& params,
-            const Eigen::VectorXd& theta) {
+// camera_of[v]: the photo whose camera parameters photo v shares (photos of one
+// camera share its pose and focal length).
+Model apply(const TraceScene& drawing, const std::vector<PlatePhoto>& photos, const std::vector<int>& camera_of,
+            const std::vector<Param>& params, const Eigen::VectorXd& theta) {
   Model m;
   m.scene = drawing;
   const std::size_t views = photos.size();
@@ -94,10 +96,12 @@ Model apply(const TraceScene& drawing, const std::vector<PlatePhoto>& photos, co
   m.scene.sheet.t_axis = moved.col(1);
   // Cameras: turned about their centre (camera frame), the centre moved (world).
   for (std::size_t v = 0; v < views; ++v) {
+    const std::size_t cv = static_cast<std::size_t>(camera_of[v]);
+    m.focal_scale[v] = m.focal_scale[cv];
     const RigidTransform& c0 = photos[v].camera_from_world;
-    const Eigen::Vector3d centre = -c0.rotation.transpose() * c0.translation_mm + cam_c[v];
+    const Eigen::Vector3d centre = -c0.rotation.transpose() * c0.translation_mm + cam_c[cv];
     RigidTransform c;
-    c.rotation = rotation_of(cam_w[v]) * c0.rotation;
+    c.rotation = rotation_of(cam_w[cv]) * c0.rotation;
     c.translation_mm = -c.rotation * centre;
     m.camera_from_world.push_back(c);
   }
@@ -158,6 +162,7 @@ struct Sample {
 // footprint (J / k) and A's gradient.
 struct Sub {
   int sample = 0;
+  int k = 1;  // the pixel's subsamples per axis (its footprint is J / k)
   Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
   Landing landing;
   double picture = 0;
@@ -199,6 +204,13 @@ bool inside_plate(const Landing& l, const PlatePicture& plate) {
   return std::abs(l.st.x()) + reach_s <= 0.5 * plate.width_mm && std::abs(l.st.y()) + reach_t <= 0.5 * plate.height_mm;
 }
 
+// The model as photo v sees it: the plate moved along the sheet's normal by
+// the photo's known offset.
+SheetPlane offset_sheet(SheetPlane sheet, double offset_mm) {
+  sheet.origin_mm += offset_mm * sheet.normal();
+  return sheet;
+}
+
 bool inside_plate_point(const SheetCrossing& c, const PlatePicture& plate) {
   return std::abs(c.s_mm) <= 0.5 * plate.width_mm && std::abs(c.t_mm) <= 0.5 * plate.height_mm;
 }
@@ -208,6 +220,15 @@ class Fitter {
   Fitter(const TraceScene& drawing, const std::vector<PlatePhoto>& photos, const PlatePicture& plate,
          const ModelFitFreedom& freedom, const ModelFitTolerances& tol, const ModelFitOptions& options)
       : drawing_(drawing), photos_(photos), plate_(plate), options_(options) {
+    for (std::size_t v = 0; v < photos.size(); ++v) {
+      int first = static_cast<int>(v);
+      for (std::size_t u = 0; u < v; ++u)
+        if (!photos[v].name.empty() && photos[u].name == photos[v].name) {
+          first = static_cast<int>(u);
+          break;
+        }
+      camera_of_.push_back(first);
+    }
     build_parameters(freedom, tol);
   }
 
@@ -242,12 +263,14 @@ class Fitter {
   ModelFitOptions options_;
   std::vector<Param> params_;
   std::vector<int> glass_spheres_;
+  std::vector<int> camera_of_;  // per photo: the first photo of the same camera (PlatePhoto::name)
 };
 
 void Fitter::build_parameters(const ModelFitFreedom& f, const ModelFitTolerances& tol) {
   const char* xyz[] = {"x", "y", "z"};
   const char* stn[] = {"s", "t", "normal"};
   for (std::size_t v = 0; v < photos_.size(); ++v) {
+    if (camera_of_[v] != static_cast<int>(v)) continue;  // shares an earlier photo's camera
     const std::string cam = photos_[v].name.empty() ? "cam" + std::to_string(v) : photos_[v].name;
     if (f.camera_pose) {
       for (int a = 0; a < 3; ++a)
@@ -317,13 +340,15 @@ double Fitter::predicted(const Sample& s, const Eigen::VectorXd& theta) const {
 Evaluation Fitter::evaluate(const Model& m, const LevelData& level, const Eigen::VectorXd& theta) {
   (void)theta;
   Evaluation e;
-  const std::unique_ptr<SceneIndex> index = make_scene_index(m.scene);
   TraceOptions trace = options_.trace;
   trace.record_solids_met = true;
   const int k = level.samples_per_axis;
   const SheetTexture& tex = *plate_.texture;
   for (std::size_t v = 0; v < photos_.size(); ++v) {
     const CameraModel cam = scaled_focal(level.cameras[v], m.focal_scale[v]);
+    TraceScene scene = m.scene;
+    scene.sheet = offset_sheet(scene.sheet, photos_[v].plate_offset_mm);
+    const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
     const int w = cam.width_px(), h = cam.height_px();
     const double full_w = photos_[v].camera.width_px(), full_h = photos_[v].camera.height_px();
     const cv::Mat& photo = level.photos[v];
@@ -347,16 +372,36 @@ Evaluation Fitter::evaluate(const Model& m, const LevelData& level, const Eigen:
         s.sub_begin = static_cast<int>(row.subs.size());
         const std::size_t solids_at = row.solids.size();
         bool ok = true;
-        for (int j = 0; j < k && ok; ++j)
-          for (int i = 0; i < k && ok; ++i) {
+        // The centre first: a pixel whose ray meets no solid maps the plate
+        // linearly (a plane seen through nothing but air), so one
+        // footprint-averaged sample is exact; one that meets glass is
+        // subsampled k x k.
+        int kp = 1;
+        Landing centre;
+        if (k > 1) {
+          centre = land(scene, *index, cam, m.camera_from_world[v], s.pixel, trace, &scratch, &met);
+          if (!centre.ok) continue;
+          // Through air: as many subsamples as keep each footprint within the
+          // picture's finest level (a coarser mip level blurs the plate more
+          // than the photo's pixels do).
+          const double texels = std::max(centre.J.col(0).norm(), centre.J.col(1).norm()) / tex.mm_per_texel();
+          const int k_air = std::clamp(static_cast<int>(std::ceil(texels / SheetTexture::kMaxTapsPerAxis)), 1, k);
+          kp = met.empty() ? k_air : k;
+        }
+        for (int j = 0; j < kp && ok; ++j)
+          for (int i = 0; i < kp && ok; ++i) {
             Sub sub;
-            sub.pixel = s.pixel + Eigen::Vector2d((i + 0.5) / k - 0.5, (j + 0.5) / k - 0.5);
-            sub.landing = land(m.scene, *index, cam, m.camera_from_world[v], sub.pixel, trace, &scratch, &met);
+            sub.k = kp;
+            sub.pixel = s.pixel + Eigen::Vector2d((i + 0.5) / kp - 0.5, (j + 0.5) / kp - 0.5);
+            // (one sample: the centre just traced, its crossings still in scratch)
+            sub.landing = k > 1 && kp == 1 ? centre
+                                           : land(scene, *index, cam, m.camera_from_world[v], sub.pixel, trace,
+                                                  &scratch, &met);
             if (!sub.landing.ok) {
               ok = false;
               break;
             }
-            sub.landing.J /= k;  // a subsample covers 1/k of the pixel along each axis
+            sub.landing.J /= kp;  // a subsample covers 1/k of the pixel along each axis
             const Eigen::Matrix2d& J = sub.landing.J;
             const double det = J.determinant();
             if (!inside_plate(sub.landing, plate_) || !std::isfinite(det) || std::abs(det) < 1e-18) {
@@ -380,7 +425,7 @@ Evaluation Fitter::evaluate(const Model& m, const LevelData& level, const Eigen:
             for (std::size_t q = 0; q < scratch.crossings.size(); ++q) {
               const SheetCrossing& g = scratch.crossings[q];
               if (static_cast<int>(q) != sub.landing.first && inside_plate_point(g, plate_))
-                ghosts += g.weight * tex.average(g.s_mm, g.t_mm, g.dst_dpixel / k);
+                ghosts += g.weight * tex.average(g.s_mm, g.t_mm, g.dst_dpixel / kp);
             }
             s.value += sub.landing.weight * sub.picture + ghosts;
             sub.solids_begin = static_cast<int>(row.solids.size());
@@ -388,12 +433,23 @@ Evaluation Fitter::evaluate(const Model& m, const LevelData& level, const Eigen:
             sub.solids_end = static_cast<int>(row.solids.size());
             row.subs.push_back(sub);
           }
+        // A pixel over which the mapping bends by more than a tenth of a
+        // pixel (a rim, a squeezed view) is predicted by its subsamples'
+        // linear pieces less well than the photo integrates it: left out.
+        if (ok && kp > 1 && k > 1) {
+          const Eigen::Matrix2d inv = centre.J.inverse();
+          for (int q = s.sub_begin; q < static_cast<int>(row.subs.size()) && ok; ++q) {
+            const Sub& sub = row.subs[static_cast<std::size_t>(q)];
+            const Eigen::Vector2d linear = centre.st + centre.J * (sub.pixel - s.pixel);
+            if ((inv * (sub.landing.st - linear)).norm() > options_.max_bend_px) ok = false;
+          }
+        }
         if (!ok) {
           row.subs.resize(static_cast<std::size_t>(s.sub_begin));
           row.solids.resize(solids_at);
           continue;
         }
-        s.value /= k * k;
+        s.value /= kp * kp;
         s.sub_end = static_cast<int>(row.subs.size());
         const int bin = level.binning;
         s.x = ((c + 0.5) * bin - 0.5 - 0.5 * (full_w - 1)) / (0.5 * full_w);
@@ -403,13 +459,14 @@ Evaluation Fitter::evaluate(const Model& m, const LevelData& level, const Eigen:
     });
     e.view_base.push_back(static_cast<int>(e.pixel_sample.size()));
     e.pixel_sample.resize(e.pixel_sample.size() + static_cast<std::size_t>(w) * static_cast<std::size_t>(h), -1);
-    e.rays += static_cast<long>(w) * h * k * k;
+    e.rays += static_cast<long>(w) * h;
     for (int r = 0; r < h; ++r) {
       Row& row = rows[static_cast<std::size_t>(r)];
       const int solid_offset = static_cast<int>(e.solids.size()), sub_offset = static_cast<int>(e.subs.size());
       e.solids.insert(e.solids.end(), row.solids.begin(), row.solids.end());
       for (Sample s : row.samples) {
         const int index_of_sample = static_cast<int>(e.samples.size());
+        e.rays += s.sub_end - s.sub_begin;
         for (int q = s.sub_begin; q < s.sub_end; ++q) {
           Sub sub = row.subs[static_cast<std::size_t>(q)];
           sub.sample = index_of_sample;
@@ -433,9 +490,14 @@ void Fitter::retraced(const TraceScene& scene, const std::vector<RigidTransform>
                       const std::vector<int>& subs, double step, std::vector<Eigen::Vector2d>* dst, long* rays) {
   dst->assign(subs.size(), Eigen::Vector2d::Zero());
   if (subs.empty()) return;
-  const std::unique_ptr<SceneIndex> index = make_scene_index(scene);
   std::vector<CameraModel> cams;
-  for (std::size_t v = 0; v < photos_.size(); ++v) cams.push_back(scaled_focal(level.cameras[v], focal[v]));
+  std::vector<TraceScene> scenes(photos_.size(), scene);
+  std::vector<std::unique_ptr<SceneIndex>> indexes;
+  for (std::size_t v = 0; v < photos_.size(); ++v) {
+    cams.push_back(scaled_focal(level.cameras[v], focal[v]));
+    scenes[v].sheet = offset_sheet(scene.sheet, photos_[v].plate_offset_mm);
+    indexes.push_back(make_scene_index(scenes[v]));
+  }
   TraceOptions chain = options_.trace;  // the derivatives follow the refracted chain only
   chain.reflections = false;
   constexpr int kChunk = 256;
@@ -446,8 +508,9 @@ void Fitter::retraced(const TraceScene& scene, const std::vector<RigidTransform>
     for (std::size_t i = static_cast<std::size_t>(chunk) * kChunk; i < end; ++i) {
       const Sub& sub = e.subs[static_cast<std::size_t>(subs[i])];
       const int view = e.samples[static_cast<std::size_t>(sub.sample)].view;
-      const Landing l = land(scene, *index, cams[static_cast<std::size_t>(view)], poses[static_cast<std::size_t>(view)],
-                             sub.pixel, chain, &scratch, nullptr);
+      const Landing l = land(scenes[static_cast<std::size_t>(view)], *indexes[static_cast<std::size_t>(view)],
+                             cams[static_cast<std::size_t>(view)], poses[static_cast<std::size_t>(view)], sub.pixel,
+                             chain, &scratch, nullptr);
       // Another sequence of surfaces (a rim): no derivative.
       if (l.ok && l.path == sub.landing.path) (*dst)[i] = (l.st - sub.landing.st) / step;
     }
@@ -466,7 +529,6 @@ Eigen::Vector2d moved_sheet_st(const Landing& l, const SheetPlane& sheet) {
 std::vector<Fitter::Column> Fitter::jacobian(const Model& m, const LevelData& level, const Evaluation& e,
                                               const Eigen::VectorXd& theta, long* rays) {
   const std::size_t n = e.samples.size();
-  const double per_sub = 1.0 / (level.samples_per_axis * level.samples_per_axis);
   std::vector<Column> cols(params_.size());
   // A column is gathered densely over the samples, then kept sparse.
   std::vector<double> dense(n, 0.0);
@@ -477,7 +539,7 @@ std::vector<Fitter::Column> Fitter::jacobian(const Model& m, const LevelData& le
     if (value == 0 || !std::isfinite(value)) return;
     double& d = dense[static_cast<std::size_t>(sub.sample)];
     if (d == 0) touched.push_back(sub.sample);
-    d += value * per_sub;
+    d += value / (sub.k * sub.k);
   };
   auto keep = [&](std::size_t k) {
     std::sort(touched.begin(), touched.end());
@@ -502,6 +564,13 @@ std::vector<Fitter::Column> Fitter::jacobian(const Model& m, const LevelData& le
     for (int j = sub.solids_begin; j < sub.solids_end; ++j)
       solid_subs[static_cast<std::size_t>(e.solids[static_cast<std::size_t>(j)])].push_back(static_cast<int>(i));
   }
+  // A camera's subsamples: those of every photo it took.
+  std::vector<std::vector<int>> camera_subs(photos_.size());
+  for (std::size_t v = 0; v < photos_.size(); ++v) {
+    auto& c = camera_subs[static_cast<std::size_t>(camera_of_[v])];
+    c.insert(c.end(), view_subs[v].begin(), view_subs[v].end());
+  }
+  for (auto& c : camera_subs) std::sort(c.begin(), c.end());
   std::vector<Eigen::Vector2d> dst;
   for (std::size_t k = 0; k < params_.size(); ++k) {
     const Param& p = params_[k];
@@ -510,7 +579,7 @@ std::vector<Fitter::Column> Fitter::jacobian(const Model& m, const LevelData& le
         const CameraModel cam = scaled_focal(level.cameras[static_cast<std::size_t>(p.view)],
                                              m.focal_scale[static_cast<std::size_t>(p.view)]);
         const Eigen::Vector3d axis = Eigen::Vector3d::Unit(p.axis);
-        for (int q : view_subs[static_cast<std::size_t>(p.view)]) {
+        for (int q : camera_subs[static_cast<std::size_t>(p.view)]) {
           const Sub& sub = e.subs[static_cast<std::size_t>(q)];
           const UnprojectResult u = cam.unproject(sub.pixel);
           if (!u.ok()) continue;
@@ -518,7 +587,7 @@ std::vector<Fitter::Column> Fitter::jacobian(const Model& m, const LevelData& le
           const Eigen::Vector3d dd = -axis.cross(d);
           const Eigen::Vector2d dn(dd.x() - d.x() * dd.z(), dd.y() - d.y() * dd.z());
           // The subsample's J is per subsample step: times k per pixel.
-          add(q, sub.landing.J * level.samples_per_axis * (u.dpixel_dnormalized * dn));
+          add(q, sub.landing.J * sub.k * (u.dpixel_dnormalized * dn));
         }
         break;
       }
@@ -527,9 +596,9 @@ std::vector<Fitter::Column> Fitter::jacobian(const Model& m, const LevelData& le
                                              m.focal_scale[static_cast<std::size_t>(p.view)]);
         const Eigen::Vector2d c(cam.cx_px(), cam.cy_px());
         const double scale = m.focal_scale[static_cast<std::size_t>(p.view)];
-        for (int q : view_subs[static_cast<std::size_t>(p.view)]) {
+        for (int q : camera_subs[static_cast<std::size_t>(p.view)]) {
           const Sub& sub = e.subs[static_cast<std::size_t>(q)];
-          add(q, sub.landing.J * level.samples_per_axis * (-(sub.pixel - c) / scale));
+          add(q, sub.landing.J * sub.k * (-(sub.pixel - c) / scale));
         }
         break;
       }
@@ -538,10 +607,11 @@ std::vector<Fitter::Column> Fitter::jacobian(const Model& m, const LevelData& le
         const double h = p.kind == Kind::sheet_rotation ? 1e-7 : 1e-5;
         Eigen::VectorXd t = theta;
         t[static_cast<Eigen::Index>(k)] += h;
-        const SheetPlane moved = apply(drawing_, photos_, params_, t).scene.sheet;
+        const SheetPlane moved = apply(drawing_, photos_, camera_of_, params_, t).scene.sheet;
         for (std::size_t q = 0; q < e.subs.size(); ++q) {
           const Landing& l = e.subs[q].landing;
-          add(static_cast<int>(q), (moved_sheet_st(l, moved) - l.st) / h);
+          const double offset = photos_[static_cast<std::size_t>(e.samples[static_cast<std::size_t>(e.subs[q].sample)].view)].plate_offset_mm;
+          add(static_cast<int>(q), (moved_sheet_st(l, offset_sheet(moved, offset)) - l.st) / h);
         }
         break;
       }
@@ -552,10 +622,10 @@ std::vector<Fitter::Column> Fitter::jacobian(const Model& m, const LevelData& le
         const double h = p.kind == Kind::index ? options_.step_index : options_.step_mm;
         Eigen::VectorXd t = theta;
         t[static_cast<Eigen::Index>(k)] += h;
-        const Model moved = apply(drawing_, photos_, params_, t);
+        const Model moved = apply(drawing_, photos_, camera_of_, params_, t);
         std::vector<int> subs;
         if (p.kind == Kind::camera_position) {
-          subs = view_subs[static_cast<std::size_t>(p.view)];
+          subs = camera_subs[static_cast<std::size_t>(p.view)];
         } else if (p.kind == Kind::index) {
           for (const auto& g : view_glass) subs.insert(subs.end(), g.begin(), g.end());
         } else {
@@ -666,7 +736,7 @@ double rms(const std::vector<double>& r) {
 // about the world axes through the origin) that move camera, glass and plate
 // together and so change no photo, as columns in parameter units.
 Eigen::MatrixXd Fitter::gauge(const Eigen::VectorXd& theta) const {
-  const Model m = apply(drawing_, photos_, params_, theta);
+  const Model m = apply(drawing_, photos_, camera_of_, params_, theta);
   const int P = static_cast<int>(params_.size());
   Eigen::MatrixXd g = Eigen::MatrixXd::Zero(P, 6);
   const SheetPlane& sheet = m.scene.sheet;
@@ -785,7 +855,7 @@ ModelFitResult Fitter::run() {
     }
     ModelFitLevel report;
     report.binning = level.binning;
-    Model model = apply(drawing_, photos_, params_, theta);
+    Model model = apply(drawing_, photos_, camera_of_, params_, theta);
     Evaluation e = evaluate(model, level, theta);
     report.traced_rays += e.rays;
     if (e.samples.empty())
@@ -848,7 +918,7 @@ ModelFitResult Fitter::run() {
           continue;
         }
         const Eigen::VectorXd trial = theta + step;
-        Model trial_model = apply(drawing_, photos_, params_, trial);
+        Model trial_model = apply(drawing_, photos_, camera_of_, params_, trial);
         Evaluation te = evaluate(trial_model, level, trial);
         report.traced_rays += te.rays;
         const std::vector<double> tr = residuals(te, trial);
@@ -906,7 +976,7 @@ ModelFitResult Fitter::run() {
         if (!seen) result.unseen_spheres.push_back(solid);
       }
       // Level at the drawing, for the report: the finest level's residual before any step.
-      Model at_drawing = apply(drawing_, photos_, params_, [&] {
+      Model at_drawing = apply(drawing_, photos_, camera_of_, params_, [&] {
         Eigen::VectorXd t = theta;
         for (int k = 0; k < P; ++k)
           if (params_[static_cast<std::size_t>(k)].prior_sigma > 0) t[k] = 0;
@@ -922,7 +992,7 @@ ModelFitResult Fitter::run() {
   }
 
   // Result: the model, the parameters with their sigma, the covariance.
-  const Model final_model = apply(drawing_, photos_, params_, theta);
+  const Model final_model = apply(drawing_, photos_, camera_of_, params_, theta);
   result.scene = final_model.scene;
   result.camera_from_world = final_model.camera_from_world;
   result.focal_scale = final_model.focal_scale;

@@ -18,6 +18,7 @@
 #include "render/trace_scene_builder.h"
 #include "targets/target_yaml.h"
 #include "util/atomic_file.h"
+#include "util/file_identity.h"
 #include "util/image_file.h"
 #include "util/input_error.h"
 #include "util/progress_bar.h"
@@ -29,6 +30,7 @@ struct FitOptions {
   std::string scene, plate, output, json, camera;
   std::vector<std::string> photos, camera_photos;
   std::vector<int> levels = {4, 2, 1};
+  std::vector<double> offsets_mm;  // per PHOTO: the plate's position along the sheet's normal
   std::vector<std::string> fix;
   bool fit_diameters = false, fit_focal = false;
   ModelFitTolerances tol;
@@ -75,6 +77,10 @@ void run_fit(const FitOptions& o) {
   const Scene scene = read_scene(o.scene);
   // The photos: PHOTO for --camera, CAM=FILE for the others.
   std::vector<std::pair<int, std::string>> views;
+  if (!o.offsets_mm.empty() && o.offsets_mm.size() != o.photos.size())
+    throw InputError("", "--plate-offsets-mm",
+                     fmt::format("gives {} offsets for {} PHOTOs (one per photo, in order)", o.offsets_mm.size(),
+                                 o.photos.size()));
   for (const std::string& p : o.photos) views.emplace_back(camera_index(scene, o.camera, "--camera"), p);
   for (const std::string& cp : o.camera_photos) {
     const std::size_t eq = cp.find('=');
@@ -83,12 +89,23 @@ void run_fit(const FitOptions& o) {
     views.emplace_back(camera_index(scene, cp.substr(0, eq), "--photo"), cp.substr(eq + 1));
   }
   if (views.empty()) throw InputError("", "PHOTO", "give a plate photo (PHOTO or --photo CAMERA=FILE)");
+  {
+    std::vector<std::string> paths;
+    for (const auto& v : views) paths.push_back(v.second);
+    check_distinct_inputs(paths, "PHOTO", "plate photo");  // one photo named twice is one view
+  }
+  // Several photos of one camera only with the plate moved between them.
   std::map<int, int> per_camera;
   for (const auto& v : views)
-    if (++per_camera[v.first] > 1)
+    if (++per_camera[v.first] > 1 && o.offsets_mm.empty())
       throw InputError(v.second, "PHOTO",
-                       fmt::format("a second photo of camera '{}': give one plate photo per camera",
+                       fmt::format("a second photo of camera '{}': give one plate photo per camera, or the plate's "
+                                   "positions with --plate-offsets-mm",
                                    scene.cameras[static_cast<std::size_t>(v.first)].name));
+  for (std::size_t i = 0; i < o.offsets_mm.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (o.offsets_mm[i] == o.offsets_mm[j])
+        throw InputError("", "--plate-offsets-mm", fmt::format("offset {} mm given twice", o.offsets_mm[i]));
   std::vector<std::string> inputs = scene_input_files(scene);
   inputs.push_back(o.plate);
   for (const auto& v : views) inputs.push_back(v.second);
@@ -100,10 +117,12 @@ void run_fit(const FitOptions& o) {
   const PlateTexture plate = naming_file(o.plate, [&] { return plate_texture(spec, o.texel_mm); });
   const TraceScene drawing = naming_file(o.scene, [&] { return build_trace_scene(scene); });
   std::vector<PlatePhoto> photos;
-  for (const auto& [cam, path] : views) {
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const auto& [cam, path] = views[i];
     const SceneCamera& sc = scene.cameras[static_cast<std::size_t>(cam)];
     const CameraModel model = o.binning > 1 ? binned(sc.camera.model, o.binning) : sc.camera.model;
-    photos.push_back({sc.name, model, *sc.camera.camera_from_world, read_photo(path, model, sc.name)});
+    const double offset = i < o.offsets_mm.size() ? o.offsets_mm[i] : 0.0;
+    photos.push_back({sc.name, model, *sc.camera.camera_from_world, read_photo(path, model, sc.name), offset});
   }
 
   ModelFitOptions options;
@@ -147,8 +166,12 @@ void run_fit(const FitOptions& o) {
   }
 
   std::vector<FittedCamera> cams;
+  std::map<int, bool> written;
   for (std::size_t i = 0; i < views.size(); ++i)
-    cams.push_back({views[i].first, fit.camera_from_world[i], fit.focal_scale[i]});
+    if (!written[views[i].first]) {
+      written[views[i].first] = true;
+      cams.push_back({views[i].first, fit.camera_from_world[i], fit.focal_scale[i]});
+    }
   const Scene fitted = fitted_scene(scene, fit.scene, cams);
   // A fitted model the scene format refuses (two balls fitted into each other
   // at a contact) is reported, not written as a file that cannot be read back.
@@ -195,8 +218,14 @@ void register_align_fit_command(CLI::App* align) {
       "fit", "fit the model to photos of a plate in the sheet plane: each glass sphere's centre, the glass index, the "
              "sheet's (plate's) pose and the camera poses, photometric, coarse to fine; writes the fitted scene");
   fit->add_option("SCENE", o.scene, "the drawing: scene file (docs/scene.md)")->required()->check(CLI::ExistingFile);
-  fit->add_option("PHOTO", o.photos, "the plate photo taken by --camera (8/16-bit TIFF, PNG, ...)")
+  fit->add_option("PHOTO", o.photos,
+                  "the plate photo taken by --camera (8/16-bit TIFF, PNG, ...); several with --plate-offsets-mm")
       ->check(CLI::ExistingFile);
+  fit->add_option("--plate-offsets-mm", o.offsets_mm,
+                  "per PHOTO, in order: the plate moved this far along the sheet's normal (a traverse; 0 = in the "
+                  "sheet); two positions tell the glass index from the balls' distance to the plate")
+      ->delimiter(',')
+      ->check(CLI::Range(-1000.0, 1000.0));
   fit->add_option("--camera", o.camera, "the scene's camera that took PHOTO (default: the first)");
   fit->add_option("--photo", o.camera_photos, "CAMERA=FILE: a plate photo of another camera (repeat for a rig)");
   fit->add_option("--plate", o.plate, "the plate's target spec (docs/targets.md), lying in the sheet plane")

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 
 #include "render/forward_render.h"
+#include "render/material.h"
 #include "render/transport_map.h"
 #include "sim/random_variates.h"
 
@@ -17,6 +18,23 @@ Eigen::Vector3d random_unit(RandomVariates& rng) {
 }
 
 }  // namespace
+
+PlateRig ball_layer_rig(int width_px, int height_px) {
+  const double f = width_px * 650.0 / 160.0;
+  PlateRig rig{{}, CameraModel(width_px, height_px, f, f, 0.5 * (width_px - 1), 0.5 * (height_px - 1), {}), {}};
+  const double n_glass = material_from_name("N-BK7").refractive_index(532);
+  rig.drawing.fluid_index = standard_air_index(532);
+  for (int j = -1; j <= 1; ++j)
+    for (int i = -1; i <= 1; ++i)
+      rig.drawing.solids.push_back(
+          {Sphere{Eigen::Vector3d(40.5 * i, 40.5 * j, 0), 20}, TraceMaterial::glass(n_glass)});
+  rig.drawing.sheet.origin_mm = Eigen::Vector3d(0, 0, 50);
+  rig.drawing.sheet.s_axis = Eigen::Vector3d::UnitX();
+  rig.drawing.sheet.t_axis = -Eigen::Vector3d::UnitY();  // t up: the camera's y runs down
+  rig.drawing.sheet.extent_s_mm = rig.drawing.sheet.extent_t_mm = 220;
+  rig.camera_from_world.translation_mm = Eigen::Vector3d(0, 0, 600);
+  return rig;
+}
 
 AsBuilt as_built(const TraceScene& drawing, const std::vector<RigidTransform>& cameras_from_world,
                  const BuildDeviation& deviation) {

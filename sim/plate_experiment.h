@@ -16,6 +16,18 @@
 
 namespace glasspiv {
 
+// The model fit's reference rig (data/scenes/ball_layer.yaml): a 3 x 3 layer of
+// 40 mm N-BK7 balls 0.5 mm apart in air, the sheet 30 mm behind the layer
+// (t up, s to the right as the camera sees it), a pinhole camera of
+// width_px x height_px 600 mm in front of the layer seeing 160 mm across at
+// the sheet.
+struct PlateRig {
+  TraceScene drawing;
+  CameraModel camera;
+  RigidTransform camera_from_world;
+};
+PlateRig ball_layer_rig(int width_px, int height_px);
+
 // How the build differs from the drawing. Each glass sphere's centre moves by
 // N(0, sphere_centre_sigma_mm) per world axis; every glass solid's index by
 // index_offset; the sheet and each camera move by a fixed distance along a
