@@ -92,19 +92,10 @@ std::vector<std::string> overlay_paths(const std::vector<std::string>& photos, c
 }
 
 void check_calib_outputs(const std::vector<std::string>& inputs, const std::vector<CalibOutput>& outputs) {
-  for (const CalibOutput& out : outputs) {
-    if (out.path.empty()) continue;
-    for (const std::string& in : inputs) {
-      if (in.empty()) continue;
-      try {
-        check_not_input(in, out.path);
-      } catch (const InputError&) {
-        throw InputError(out.path, out.option,
-                         in == out.path ? "is an input of this command; glasspiv never overwrites its inputs"
-                                        : "is the input '" + in + "'; glasspiv never overwrites its inputs");
-      }
-    }
-  }
+  std::vector<OutputFile> given;
+  for (const CalibOutput& out : outputs)
+    if (!out.path.empty()) given.push_back(out);
+  check_outputs(inputs, given);
 }
 
 Observations detect_in_photos(const std::vector<std::string>& photos, const TargetSpec& spec,
