@@ -243,7 +243,14 @@ void check_output_folder(const std::string& folder, const std::string& field) {
     throw InputError(folder, field, "exists and is not a folder");
   for (fs::recursive_directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
     const fs::file_type t = it->symlink_status(ec).type();
-    if (t == fs::file_type::regular || t == fs::file_type::directory) continue;
+    if (t == fs::file_type::directory) continue;
+    if (t == fs::file_type::regular) {
+      // The command may replace any file of the folder: only by one of the kind its name says.
+      if (const std::string problem = output_kind_problem(it->path().string(), OutputKind::by_extension);
+          !problem.empty())
+        throw InputError(it->path().string(), field, problem);
+      continue;
+    }
     try {
       check_replaceable_output(it->path().string());
     } catch (const InputError& e) {

@@ -68,8 +68,10 @@ std::vector<std::string> scene_input_files(const Scene& scene);
 void make_output_folder(const std::string& folder, const std::string& field);
 
 // The demo's kind of output, a folder the command owns: InputError if `folder`
-// exists and is not a folder, or holds (at any depth, not following links) an
-// entry that is neither a regular file nor a folder.
+// exists and is not a folder, its name is too long, or it holds (at any depth,
+// not following links) an entry that is neither a regular file nor a folder,
+// or a file whose contents are not of the kind its extension names (the
+// command would replace it: output_kind_problem with OutputKind::by_extension).
 void check_output_folder(const std::string& folder, const std::string& field);
 
 }  // namespace glasspiv

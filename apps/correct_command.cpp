@@ -98,7 +98,8 @@ std::pair<int, int> parse_shard(const std::string& text) {
 
 // Files, folders of images (sorted) or glob patterns.
 std::vector<std::string> expand_frames(const std::string& spec) {
-  if (spec.find_first_of("*?[") != std::string::npos && !fs::exists(spec)) {
+  std::error_code ec;
+  if (spec.find_first_of("*?[") != std::string::npos && !fs::exists(spec, ec)) {
     glob_t g{};
     std::vector<std::string> out;
     if (::glob(spec.c_str(), 0, nullptr, &g) == 0)

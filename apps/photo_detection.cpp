@@ -69,7 +69,8 @@ std::vector<std::string> expand_photo_inputs(const std::vector<std::string>& inp
     }
     std::vector<std::string> found;
     for (const auto& entry : fs::directory_iterator(input, ec))
-      if (entry.is_regular_file() && is_image_name(entry.path())) found.push_back(entry.path().string());
+      if (std::error_code type; entry.is_regular_file(type) && is_image_name(entry.path()))
+        found.push_back(entry.path().string());
     if (found.empty()) throw InputError(input, "", "holds no images (.tif, .tiff, .png, .jpg, .jpeg, .bmp)");
     std::sort(found.begin(), found.end());
     photos.insert(photos.end(), found.begin(), found.end());

@@ -77,6 +77,8 @@ cp keep.png pic.yaml
 refused "pic.yaml" "not a text file" -- "$G" camera convert "$src/data/cameras/example.yaml" pic.yaml
 unchanged pic.yaml keep.png
 printf 'x' >report_file
+mkdir -p demo_out && printf 'a: 1\n' >demo_out/report.html && cp keep.png demo_out/index.html
+refused "index.html" "not a text file" -- "$G" demo -o demo_out
 refused "report_file" "not a folder" -- "$G" calib report "$src/data/calibration/opencv_left/target.yaml" -o report_file
 no_temporaries
 
