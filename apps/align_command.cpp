@@ -31,10 +31,12 @@
 #include "apps/png_file.h"
 #include "render/setup_render.h"
 #include "targets/photo_io.h"
+#include "util/json_document.h"
 #include "util/atomic_file.h"
 #include "util/file_identity.h"
 #include "util/image_file.h"
 #include "util/input_error.h"
+#include "util/input_file.h"
 #include "util/progress_bar.h"
 
 namespace glasspiv {
@@ -98,14 +100,16 @@ nlohmann::json pose_json(const RigidTransform& t) {
 }
 
 void write_json(const std::string& path, const nlohmann::json& j) {
-  if (!path.empty()) write_file_atomically(path, j.dump(2) + "\n");
+  if (!path.empty()) write_file_atomically(path, json_text(j));
 }
 
 // -o scene.yaml: the scene with the camera's pose replaced, in the scene's folder.
 void check_scene_out(const AlignOptions& o) {
   if (o.scene_out.empty()) return;
-  const fs::path in = fs::absolute(o.scene).parent_path(), out = fs::absolute(o.scene_out).parent_path();
-  if (fs::weakly_canonical(in) != fs::weakly_canonical(out))
+  std::error_code ec;
+  const fs::path in = fs::absolute(o.scene, ec).parent_path(), out = fs::absolute(o.scene_out, ec).parent_path();
+  const fs::path in_canonical = fs::weakly_canonical(in, ec), out_canonical = fs::weakly_canonical(out, ec);
+  if (ec || in_canonical != out_canonical)
     throw InputError(o.scene_out, "--scene-out",
                      "must lie in the scene's own folder (its relative paths to cameras and textures stay valid)");
 }
@@ -116,18 +120,32 @@ void write_scene_out(const AlignOptions& o, const PreparedScene& ps, const Rigid
   std::printf("wrote %s (camera '%s' with the new pose)\n", o.scene_out.c_str(), ps.camera_name().c_str());
 }
 
-std::vector<OutputFile> outputs_of(const AlignOptions& o) {
+std::string sibling(const std::string& path, const std::string& suffix) {
+  const fs::path p(path);
+  return (p.parent_path() / (p.stem().string() + suffix + p.extension().string())).string();
+}
+
+// Every file the command writes, the names derived from -o (`_edges`, `_checker`,
+// `_px`) included, each with its kind: all checked together against every input.
+std::vector<OutputFile> outputs_of(const AlignOptions& o, const std::vector<std::string>& derived_suffixes = {}) {
   std::vector<OutputFile> out;
-  if (!o.output.empty()) out.push_back({o.output, "-o"});
-  if (!o.json.empty()) out.push_back({o.json, "--json"});
-  if (!o.scene_out.empty()) out.push_back({o.scene_out, "--scene-out"});
+  if (!o.output.empty()) {
+    out.push_back({o.output, "-o", OutputKind::image});
+    for (const std::string& suffix : derived_suffixes) out.push_back({sibling(o.output, suffix), "-o", OutputKind::image});
+  }
+  if (!o.json.empty()) out.push_back({o.json, "--json", OutputKind::json});
+  if (!o.scene_out.empty()) out.push_back({o.scene_out, "--scene-out", OutputKind::text});
   return out;
 }
 
-void check_files(const AlignOptions& o, const PreparedScene& ps) {
-  std::vector<std::string> inputs = scene_input_files(ps.scene);
+// The overlays -o writes besides itself.
+const std::vector<std::string> kOverlaySuffixes = {"_edges", "_checker"};
+
+void check_files(const AlignOptions& o, const Scene& scene, const std::vector<std::string>& derived_suffixes) {
+  std::vector<std::string> inputs = scene_input_files(scene);
   inputs.insert(inputs.end(), o.photos.begin(), o.photos.end());
-  check_outputs(inputs, outputs_of(o));
+  if (!o.pose_json.empty()) inputs.push_back(o.pose_json);
+  check_outputs(inputs, outputs_of(o, derived_suffixes));
   check_scene_out(o);
 }
 
@@ -217,7 +235,7 @@ void run_pose(const AlignOptions& o) {
     if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size())
       throw InputError("", "--photo", fmt::format("'{}' is not CAMERA=FILE", spec));
     const std::string name = spec.substr(0, eq), file = spec.substr(eq + 1);
-    if (!fs::is_regular_file(file)) throw InputError(file, "--photo", "does not exist");
+    check_input_file(file, "--photo");  // a regular file: a fifo is refused, never opened
     auto it = std::find_if(per_camera.begin(), per_camera.end(), [&](const auto& p) { return p.first == name; });
     if (it == per_camera.end()) it = per_camera.insert(per_camera.end(), {name, {}});
     it->second.push_back(file);
@@ -247,10 +265,6 @@ void run_pose(const AlignOptions& o) {
 }
 
 // --- align check ----------------------------------------------------------------
-std::string sibling(const std::string& path, const std::string& suffix) {
-  const fs::path p(path);
-  return (p.parent_path() / (p.stem().string() + suffix + p.extension().string())).string();
-}
 
 std::vector<float> render_view(const PreparedScene& ps, const CameraModel& model, const RigidTransform& pose,
                                const AlignOptions& o, const char* label) {
@@ -313,9 +327,7 @@ CornerDistances corner_distances(const PreparedScene& ps, const std::vector<Scen
 void run_check(const AlignOptions& o) {
   if (lower_extension(o.output) != ".png") throw InputError(o.output, "-o", "must end in .png");
   const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning, SceneUse::setup_only);
-  check_files(o, ps);
-  std::vector<OutputFile> more = {{sibling(o.output, "_edges"), "-o"}, {sibling(o.output, "_checker"), "-o"}};
-  check_outputs(scene_input_files(ps.scene), more);
+  check_files(o, ps.scene, kOverlaySuffixes);
   const CameraModel& model = ps.camera().model;
   const cv::Mat photo = read_photo_values(o.photos.front(), model, ps.camera_name());
   const RigidTransform pose = *ps.camera().camera_from_world;
@@ -341,7 +353,7 @@ void run_refine(const AlignOptions& o) {
   for (int b : o.levels)
     if (b < 1 || b > 64) throw InputError("", "--levels", fmt::format("binning {} is not in 1..64", b));
   const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning, SceneUse::setup_only);
-  check_files(o, ps);
+  check_files(o, ps.scene, kOverlaySuffixes);
   const CameraModel& model = ps.camera().model;
   const cv::Mat photo = read_photo_values(o.photos.front(), model, ps.camera_name());
   const RigidTransform start = *ps.camera().camera_from_world;
@@ -410,8 +422,6 @@ void run_refine(const AlignOptions& o) {
     j["levels"].push_back({{"binning", l.binning}, {"gradient_ncc_before", l.gradient_ncc_before},
                            {"gradient_ncc_after", l.gradient_ncc_after}, {"renders", l.renders}, {"seconds", l.seconds}});
   if (!o.output.empty()) {
-    std::vector<OutputFile> more = {{sibling(o.output, "_edges"), "-o"}, {sibling(o.output, "_checker"), "-o"}};
-    check_outputs(scene_input_files(ps.scene), more);
     const CameraModel refined_model = scaled_focal(model, r.focal_scale);
     const TraceScene refined_scene = adjusted_glass(ps.trace, r.refractive_index_offset, r.glass_offset_mm);
     ProgressBar bar("render", static_cast<std::size_t>(model.height_px()));
@@ -431,13 +441,10 @@ void run_refine(const AlignOptions& o) {
 
 // The 6 x 6 covariance `align pose --json` wrote.
 Eigen::Matrix<double, 6, 6> pose_covariance_from_json(const std::string& path) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(read_file(path));
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path, "", std::string("not JSON: ") + e.what());
-  }
-  const auto& rows = j.contains("covariance") ? j["covariance"] : nlohmann::json();
+  // Malformed text, NaN and the like: one line naming the file and field (util/json_document.h).
+  const nlohmann::json j = read_json_document(path);
+  if (!j.is_object()) throw InputError(path, "", "must be a JSON object (write it with `glasspiv align pose --json`)");
+  const nlohmann::json rows = j.contains("covariance") ? j.at("covariance") : nlohmann::json();
   if (!rows.is_array() || rows.size() != 6)
     throw InputError(path, "covariance", "needs 6 rows of 6 numbers (write it with `glasspiv align pose --json`)");
   Eigen::Matrix<double, 6, 6> c;
@@ -461,11 +468,7 @@ void run_sensitivity(const AlignOptions& o) {
   if (o.step_px < 1) throw InputError("", "--step-px", "must be 1 or more");
   if (o.mc_samples == 1) throw InputError("", "--monte-carlo", "needs 2 samples or more");
   const PreparedScene ps = prepare_scene(o.scene, o.camera, o.binning);
-  std::vector<std::string> inputs = scene_input_files(ps.scene);
-  if (!o.pose_json.empty()) inputs.push_back(o.pose_json);
-  std::vector<OutputFile> outputs = {{o.output, "-o"}, {sibling(o.output, "_px"), "-o"}};
-  if (!o.json.empty()) outputs.push_back({o.json, "--json"});
-  check_outputs(inputs, outputs);
+  check_files(o, ps.scene, {"_px"});
   ModelTolerances tol;
   tol.camera_position_mm = o.tol_camera_mm;
   tol.camera_rotation_deg = o.tol_camera_deg;

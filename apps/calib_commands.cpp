@@ -229,10 +229,12 @@ void run_intrinsics(const IntrinsicsOptions& o) {
     std::vector<std::string> inputs = from_observations ? std::vector<std::string>{o.inputs[0]} : photos;
     inputs.push_back(o.target);
     inputs.push_back(o.fit.initial_camera);
-    std::vector<CalibOutput> outputs = {{o.output, "-o"}, {report_dir_for(o), "--report"}};
+    std::vector<CalibOutput> outputs = {{o.output, "-o"}, {report_dir_for(o), "--report", OutputKind::folder}};
+    if (!report_dir_for(o).empty())
+      for (const std::string& path : calibration_report_file_paths(report_dir_for(o))) outputs.push_back({path, "--report"});
     if (!from_observations) {
       outputs.push_back({o.observations_out, "--observations-out"});
-      outputs.push_back({o.overlay_dir, "--overlay-dir"});
+      outputs.push_back({o.overlay_dir, "--overlay-dir", OutputKind::folder});
       for (const std::string& path : overlay_paths(photos, o.overlay_dir)) outputs.push_back({path, "--overlay-dir"});
     }
     check_calib_outputs(inputs, outputs);
@@ -288,7 +290,9 @@ struct ReportOptions {
 };
 
 void run_report(const ReportOptions& o) {
-  check_calib_outputs({o.observations, o.fit.initial_camera}, {{o.output_dir, "-o"}});
+  std::vector<CalibOutput> outputs = {{o.output_dir, "-o", OutputKind::folder}};
+  for (const std::string& path : calibration_report_file_paths(o.output_dir)) outputs.push_back({path, "-o"});
+  check_calib_outputs({o.observations, o.fit.initial_camera}, outputs);
   const Observations observations = read_observations(o.observations);
   const IntrinsicFitOptions options = o.fit.to_options(observations);
   const FitOutcome outcome = naming_file(

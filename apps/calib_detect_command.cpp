@@ -37,7 +37,7 @@ void run_detect(const DetectCommandOptions& o) {
   // No output may replace an input (a photo or the target spec): before any detection.
   std::vector<std::string> inputs = photos;
   inputs.push_back(o.target);
-  std::vector<CalibOutput> outputs = {{o.output, "-o"}, {o.vnl, "--vnl"}, {o.detection.overlay_dir, "--overlay-dir"}};
+  std::vector<CalibOutput> outputs = {{o.output, "-o"}, {o.vnl, "--vnl"}, {o.detection.overlay_dir, "--overlay-dir", OutputKind::folder}};
   for (const std::string& path : overlay_paths(photos, o.detection.overlay_dir)) outputs.push_back({path, "--overlay-dir"});
   check_calib_outputs(inputs, outputs);
   const Observations observations = detect_in_photos(photos, spec, o.target, o.detection);

@@ -28,6 +28,7 @@
 #include "targets/observations_io.h"
 #include "targets/target_spec.h"
 #include "targets/target_yaml.h"
+#include "util/json_document.h"
 #include "util/atomic_file.h"
 #include "util/input_error.h"
 #include "util/progress_bar.h"
@@ -122,7 +123,7 @@ void run_next(const NextCommandOptions& o) {
                     placement_path = (out / "placement.png").string(), before_path = (out / "before.png").string(),
                     after_path = (out / "after.png").string();
   check_calib_outputs({o.observations, o.target, o.camera},
-                      {{dir, "-o"}, {html_path, "-o"}, {json_path, "-o"}, {placement_path, "-o"},
+                      {{dir, "-o", OutputKind::folder}, {html_path, "-o"}, {json_path, "-o"}, {placement_path, "-o"},
                        {before_path, "-o"}, {after_path, "-o"}});
   const TargetSpec spec = read_target_yaml(o.target);
   require_target_corners(spec, o.target, "calib next");
@@ -205,7 +206,7 @@ void run_next(const NextCommandOptions& o) {
               result.candidates.size(), result.poses_tried);
 
   // Pictures on one colour scale: the map now.
-  fs::create_directories(out);
+  make_output_folder(dir, "-o");
   const double top = std::isfinite(result.worst_before_px) ? result.worst_before_px : 0;
   // One colour scale [0, top] for the three, so before and after compare by colour.
   const auto map = [&](const GridValues& values, const std::string& title) {
@@ -254,7 +255,7 @@ void run_next(const NextCommandOptions& o) {
   for (const CandidateView* c : ranked) top_five.push_back(candidate_json(*c, w, h));
   j["candidates"] = {{"tried", result.poses_tried}, {"feasible", result.candidates.size()}, {"best", top_five}};
   j["files"] = {{"placement", "placement.png"}, {"before", "before.png"}, {"after", "after.png"}, {"page", "next_view.html"}};
-  write_file_atomically(json_path, j.dump(2) + "\n");
+  write_file_atomically(json_path, json_text(j));
 
   std::string page = "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n";
   page += "<title>glasspiv: the next calibration view</title>\n";

@@ -14,6 +14,7 @@
 #include "apps/html_text.h"
 #include "apps/plots.h"
 #include "calib/lens_maps.h"
+#include "util/json_document.h"
 #include "util/atomic_file.h"
 
 namespace glasspiv {
@@ -70,6 +71,14 @@ double parameter_sigma(const IntrinsicFit& fit, int index) {
 }
 
 }  // namespace
+
+std::vector<std::string> calibration_report_file_paths(const std::string& folder) {
+  std::vector<std::string> paths;
+  for (const char* name : {"report.html", "metrics.json", "residuals.png", "coverage.png", "uncertainty.png",
+                           "distortion.png", "cross_validation.png", "truth_difference.png"})
+    paths.push_back((fs::path(folder) / name).string());
+  return paths;
+}
 
 CalibrationReportFiles write_calibration_report(const std::string& folder, const CalibrationReportInputs& in) {
   const fs::path dir(folder);
@@ -221,7 +230,7 @@ CalibrationReportFiles write_calibration_report(const std::string& folder, const
                                                                       : nlohmann::json(nullptr)}});
   j["views"] = views;
   const std::string json_path = (dir / "metrics.json").string();
-  write_file_atomically(json_path, j.dump(2) + "\n");
+  write_file_atomically(json_path, json_text(j));
 
   // The page.
   std::string page;

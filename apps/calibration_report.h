@@ -7,6 +7,7 @@
 // (the fitted model has no ray there), and counted on the maps.
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "calib/camera.h"
 #include "calib/fit/calibration_diagnostics.h"
@@ -32,5 +33,9 @@ struct CalibrationReportFiles {
 };
 
 CalibrationReportFiles write_calibration_report(const std::string& folder, const CalibrationReportInputs& in);
+
+// Every file write_calibration_report may write into `folder` (for the
+// commands' output checks, before any work).
+std::vector<std::string> calibration_report_file_paths(const std::string& folder);
 
 }  // namespace glasspiv

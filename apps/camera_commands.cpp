@@ -40,7 +40,7 @@ void check_plot(const std::vector<std::string>& inputs, const std::string& plot)
 }
 
 void run_convert(const ConvertOptions& o) {
-  check_outputs({o.input}, {{o.output, "output"}});
+  check_outputs({o.input}, {{o.output, "output", OutputKind::text}});
   Camera camera = read_camera(o.input, o.camera);
   if (o.pixel_pitch_um != 0) {
     if (!(o.pixel_pitch_um > 0)) throw InputError("", "--pixel-pitch-um", "must be positive");

@@ -1,12 +1,15 @@
 #include "apps/cli_checks.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <functional>
 
 #include <fmt/format.h>
 
 #include "util/input_error.h"
+#include "util/input_file.h"
+#include "util/text_number.h"
 
 namespace glasspiv {
 namespace {
@@ -36,7 +39,23 @@ std::string decimal_integer(std::string& text, bool allow_negative) {
   if (!digits) return "'" + text + "' is not a whole number in decimal";
   if (!allow_negative && text[0] == '-' && text.find_first_not_of("0", 1) != std::string::npos)
     return "'" + text + "' is negative; this option takes 0 or more";
+  // CLI11 refuses a value beyond a narrower type itself, but saturates one
+  // beyond 64 bits (strtoll / strtoull): 2^64 + 1 would read as 2^64 - 1.
+  // (A value within 64 bits but beyond a narrower type: conversion_problem.)
+  if (allow_negative ? !parse_integer<std::int64_t>(text) : !parse_integer<std::uint64_t>(text))
+    return "'" + text + "' is out of this option's range";
   return "";
+}
+
+// CLI::ExistingFile lets a fifo or a device through (it only refuses folders);
+// an input must be a regular file (util/input_file.h), refused naming the option.
+CLI::Validator regular_input_file() {
+  return CLI::Validator(
+      [](std::string& path) -> std::string {
+        const std::string problem = input_file_problem(path);
+        return problem.empty() ? "" : path + ": " + problem;
+      },
+      "FILE");
 }
 
 // CLI11's PositiveNumber and NonNegativeNumber are Ranges up to the largest
@@ -65,6 +84,7 @@ void replace_unbounded_ranges(CLI::Option* o) {
     }
     const std::string d = v->get_description();
     if (d == "POSITIVE" || d == "NONNEGATIVE") *v = sign_check(d == "POSITIVE", d);
+    if (d == "FILE") *v = regular_input_file();
   }
 }
 
@@ -91,6 +111,31 @@ void visit(CLI::App* app) {
 }  // namespace
 
 void check_numeric_options(CLI::App& app) { visit(&app); }
+
+std::string conversion_problem(CLI::App& app, const CLI::ConversionError& e) {
+  const std::string what = e.what();
+  const std::string prefix = "Could not convert: ";
+  const std::size_t eq = what.find(" = ");
+  if (what.rfind(prefix, 0) != 0 || eq == std::string::npos) return what;
+  const std::string name = what.substr(prefix.size(), eq - prefix.size()), value = what.substr(eq + 3);
+  // The option in the deepest subcommand parsed, or an app above it.
+  CLI::App* deepest = &app;
+  for (bool deeper = true; deeper;) {
+    deeper = false;
+    for (CLI::App* sub : deepest->get_subcommands())
+      if (sub->parsed()) {
+        deepest = sub;
+        deeper = true;
+        break;
+      }
+  }
+  const CLI::Option* option = nullptr;
+  for (CLI::App* a = deepest; a && !option; a = a->get_parent()) option = a->get_option_no_throw(name);
+  const std::string type = option ? base_type(option) : "";
+  if (type == "INT" || type == "UINT") return fmt::format("{}: '{}' is out of this option's range", name, value);
+  if (starts_with(type, "FLOAT")) return fmt::format("{}: '{}' is not a number", name, value);
+  return fmt::format("{}: '{}' is not a valid value", name, value);
+}
 
 void check_sample_grid(const std::string& field, int width_px, int height_px, double step_px) {
   if (!(step_px > 0) || !std::isfinite(step_px)) throw InputError("", field, "must be a finite number above 0");

@@ -2,11 +2,14 @@
 // Checks every command shares: numbers on the command line, the work an option
 // implies, and the wording of counts and numbers in messages.
 #include <cstddef>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include <CLI/CLI.hpp>
 
 #include "util/input_error.h"
+#include "util/text_number.h"
 
 namespace glasspiv {
 
@@ -29,6 +32,26 @@ auto naming_file(const std::string& file, F&& work) -> decltype(work()) {
 // not be negative (CLI11 would wrap -1 to 2^64 - 1). Also every --threads
 // option is bounded by kMaxThreads.
 void check_numeric_options(CLI::App& app);
+
+// The message for CLI11's "Could not convert: NAME = VALUE", in words: once
+// check_numeric_options has passed a whole number (decimal, within 64 bits), a
+// conversion can only fail because the option's type is narrower
+// ("--levels: '4294967304' is out of this option's range"); other values
+// are "not a number" / "not a valid value". `app`: the parsed command line.
+std::string conversion_problem(CLI::App& app, const CLI::ConversionError& e);
+
+// A whole number written inside an option's text ("K/N" of --shard, an item of
+// a list): `part` of `text` in decimal, within [min, max] (and so within T),
+// else InputError("", field, ...) quoting both: never wrapped or saturated.
+template <typename T>
+T option_integer(const std::string& field, const std::string& text, std::string_view part, T min, T max) {
+  const std::optional<T> value = parse_integer<T>(part);
+  if (!value || *value < min || *value > max)
+    throw InputError("", field,
+                     "'" + text + "': '" + std::string(part) + "' is not a whole number from " + std::to_string(min) +
+                         " to " + std::to_string(max));
+  return *value;
+}
 
 // Limits on the work an option's value implies, checked before the work.
 constexpr int kMaxThreads = 1024;                  // --threads

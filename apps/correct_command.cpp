@@ -4,6 +4,8 @@
 // glasspiv coverage: which parts of the sheet a set of cameras can reconstruct.
 #include <glob.h>
 
+#include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -83,16 +85,21 @@ SheetGrid grid_for(const CorrectionScene& cs, double mm_per_px) {
 
 // "K/N" with 0 <= K < N.
 std::pair<int, int> parse_shard(const std::string& text) {
-  int k = -1, n = 0;
-  char slash = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d %c %d %c", &k, &slash, &n, &extra) != 3 || slash != '/' || n < 1 || k < 0 || k >= n)
+  const std::size_t slash = text.find('/');
+  if (slash == std::string::npos || text.find('/', slash + 1) != std::string::npos)
     throw InputError("", "--shard", fmt::format("'{}' is not K/N with 0 <= K < N (e.g. 0/4 .. 3/4)", text));
+  // Each number within int, never wrapped: 4294967296/2 is not 0/2.
+  const std::string_view all(text);
+  const int n = option_integer<int>("--shard", text, all.substr(slash + 1), 1, INT_MAX);
+  const int k = option_integer<int>("--shard", text, all.substr(0, slash), 0, INT_MAX);
+  if (k >= n) throw InputError("", "--shard", fmt::format("'{}' is not K/N with 0 <= K < N (e.g. 0/4 .. 3/4)", text));
   return {k, n};
 }
 
 // Files, folders of images (sorted) or glob patterns.
 std::vector<std::string> expand_frames(const std::string& spec) {
-  if (spec.find_first_of("*?[") != std::string::npos && !fs::exists(spec)) {
+  std::error_code ec;
+  if (spec.find_first_of("*?[") != std::string::npos && !fs::exists(spec, ec)) {
     glob_t g{};
     std::vector<std::string> out;
     if (::glob(spec.c_str(), 0, nullptr, &g) == 0)
@@ -164,7 +171,9 @@ std::vector<std::string> output_names(const std::vector<std::string>& inputs, co
   std::set<std::string> seen;
   for (const std::string& in : inputs) {
     const std::string name = (fs::path(dir) / (fs::path(in).stem().string() + ".tif")).string();
-    if (!seen.insert(fs::weakly_canonical(name).string()).second)
+    std::error_code ec;
+    const fs::path canonical = fs::weakly_canonical(name, ec);
+    if (!seen.insert((ec ? fs::path(name).lexically_normal() : canonical).string()).second)
       throw InputError(in, "", "two frames would be written to the same output " + name + " (rename one)");
     out.push_back(name);
   }
@@ -187,11 +196,11 @@ void run_one_camera(const CorrectOptions& o) {
   // Every output against every input (the scene's files included), before any work.
   std::vector<std::string> all_inputs = scene_input_files(cs.scene);
   all_inputs.insert(all_inputs.end(), inputs.begin(), inputs.end());
-  std::vector<OutputFile> all_outputs;
+  std::vector<OutputFile> all_outputs = {{o.output, "-o", OutputKind::folder}};
   for (const std::string& out : outputs) all_outputs.push_back({out, "-o"});
   all_outputs.push_back({(fs::path(o.output) / "mask.tif").string(), "-o"});
   if (o.grid == "sheet") all_outputs.push_back({(fs::path(o.output) / "sheet_grid.yaml").string(), "-o"});
-  if (!s.cache_dir.empty()) all_outputs.push_back({correction_cache_files(cs.scene, ci, s).map, "--cache-dir"});
+  if (!s.cache_dir.empty()) all_outputs.push_back({correction_cache_files(cs.scene, ci, s).map, "--cache-dir", OutputKind::transport_map});
   check_outputs(all_inputs, all_outputs);
   if (o.mm_per_px > 0) grid_for(cs, o.mm_per_px);
   std::vector<std::size_t> frames(inputs.size());
@@ -202,12 +211,12 @@ void run_one_camera(const CorrectOptions& o) {
   }
   if (o.prepare_only) frames.clear();
   check_frame_headers(inputs, cs, ci, o.binning);
-  fs::create_directories(o.output);
+  make_output_folder(o.output, "-o");
 
   const GlassRemovedView direct = glass_removed_view(cs, ci, s);
   const SheetGrid grid = grid_for(cs, o.mm_per_px > 0 ? o.mm_per_px : direct.footprint_mm);
   if (!s.cache_dir.empty()) {
-    all_outputs.push_back({correction_cache_files(cs.scene, ci, s, grid.cols, grid.rows).op, "--cache-dir"});
+    all_outputs.push_back({correction_cache_files(cs.scene, ci, s, grid.cols, grid.rows).op, "--cache-dir", OutputKind::correction_operator});
     check_outputs(all_inputs, all_outputs);
   }
   std::printf("scene %s: camera '%s'; sheet grid %dx%d cells of %.4g mm%s\n", o.scene.c_str(),
@@ -343,7 +352,7 @@ void run_several_cameras(const CorrectOptions& o) {
   for (const std::string& out : outputs) all_outputs.push_back({out, "-o"});
   for (const std::string& side : {mask_path, coverage_path, stem + "sheet_grid.yaml"}) all_outputs.push_back({side, "-o"});
   if (!s.cache_dir.empty())
-    for (const auto& pc : per_camera) all_outputs.push_back({correction_cache_files(cs.scene, pc.first, s).map, "--cache-dir"});
+    for (const auto& pc : per_camera) all_outputs.push_back({correction_cache_files(cs.scene, pc.first, s).map, "--cache-dir", OutputKind::transport_map});
   check_outputs(all_inputs, all_outputs);
   if (o.mm_per_px > 0) grid_for(cs, o.mm_per_px);
   std::vector<std::size_t> frames(count);
@@ -354,13 +363,13 @@ void run_several_cameras(const CorrectOptions& o) {
   }
   if (o.prepare_only) frames.clear();
   for (const auto& [ci, files] : per_camera) check_frame_headers(files, cs, ci, o.binning);
-  if (!dir.empty()) fs::create_directories(dir);
+  make_output_folder(dir, "-o");
 
   const GlassRemovedView direct = glass_removed_view(cs, per_camera.front().first, s);
   const SheetGrid grid = grid_for(cs, o.mm_per_px > 0 ? o.mm_per_px : direct.footprint_mm);
   if (!s.cache_dir.empty()) {
     for (const auto& pc : per_camera)
-      all_outputs.push_back({correction_cache_files(cs.scene, pc.first, s, grid.cols, grid.rows).op, "--cache-dir"});
+      all_outputs.push_back({correction_cache_files(cs.scene, pc.first, s, grid.cols, grid.rows).op, "--cache-dir", OutputKind::correction_operator});
     check_outputs(all_inputs, all_outputs);
   }
   std::printf("scene %s: %s, %s each; sheet grid %dx%d cells of %.4g mm\n", o.scene.c_str(),
@@ -459,7 +468,12 @@ void run_coverage(const CoverageOptions& o) {
   std::vector<int> indices;
   if (o.cameras.empty())
     for (std::size_t i = 0; i < cs.scene.cameras.size(); ++i) indices.push_back(static_cast<int>(i));
-  for (const std::string& name : o.cameras) indices.push_back(find_camera(cs.scene, name, "--camera"));
+  for (const std::string& name : o.cameras) {
+    const int ci = find_camera(cs.scene, name, "--camera");
+    if (std::find(indices.begin(), indices.end(), ci) != indices.end())
+      throw InputError("", "--camera", "camera '" + name + "' is given twice (name each camera once)");
+    indices.push_back(ci);
+  }
   CorrectOptions co;
   co.binning = o.binning;
   co.threads = o.threads;
@@ -472,11 +486,11 @@ void run_coverage(const CoverageOptions& o) {
   // Every output against every file the scene reads, before any work.
   const std::vector<std::string> inputs = scene_input_files(cs.scene);
   std::vector<OutputFile> outputs = {{o.output, "-o"}};
-  for (int ci : indices) outputs.push_back({correction_cache_files(cs.scene, ci, s).map, "--cache-dir"});
+  for (int ci : indices) outputs.push_back({correction_cache_files(cs.scene, ci, s).map, "--cache-dir", OutputKind::transport_map});
   check_outputs(inputs, outputs);
   const SheetGrid grid =
       grid_for(cs, o.mm_per_px > 0 ? o.mm_per_px : glass_removed_view(cs, indices.front(), s).footprint_mm);
-  for (int ci : indices) outputs.push_back({correction_cache_files(cs.scene, ci, s, grid.cols, grid.rows).op, "--cache-dir"});
+  for (int ci : indices) outputs.push_back({correction_cache_files(cs.scene, ci, s, grid.cols, grid.rows).op, "--cache-dir", OutputKind::correction_operator});
   check_outputs(inputs, outputs);
   std::printf("scene %s: sheet grid %dx%d cells of %.4g mm\n", o.scene.c_str(), grid.cols, grid.rows, grid.mm_per_px);
   for (int ci : indices) add_correction_camera(cs, ci, grid, s);

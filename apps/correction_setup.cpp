@@ -59,7 +59,11 @@ void add_correction_camera(CorrectionScene& cs, int camera_index, const SheetGri
   CorrectionCamera cam{sc.name, sc.field, camera_model(cs, camera_index, s), *sc.camera.camera_from_world, {}};
   const CorrectionCacheFiles cache = correction_cache_files(cs.scene, camera_index, s, grid.cols, grid.rows);
   const std::string map_path = cache.map, op_path = cache.op;
-  if (!s.cache_dir.empty()) fs::create_directories(s.cache_dir);
+  if (!s.cache_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(s.cache_dir, ec);
+    if (ec) throw InputError(s.cache_dir, "--cache-dir", "cannot create the folder: " + ec.message());
+  }
   const std::uint64_t map_fp = transport_map_fingerprint(cs.trace, cam.model, cam.pose, s.trace, s.samples);
   // A valid cached operator needs no map.
   if (!op_path.empty()) {

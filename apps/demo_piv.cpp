@@ -23,6 +23,7 @@
 #include "sim/piv_experiment.h"
 #include "sim/piv_score.h"
 #include "sim/vortex_experiment.h"
+#include "util/json_document.h"
 #include "util/atomic_file.h"
 #include "util/input_error.h"
 #include "util/stopwatch.h"
@@ -255,7 +256,7 @@ std::string write_metrics(const fs::path& out, const DemoPivSummary& s) {
         {"five_cameras", s.five_seconds}}},
   };
   const std::string path = (out / "metrics.json").string();
-  write_file_atomically(path, j.dump(2) + "\n");
+  write_file_atomically(path, json_text(j));
   return path;
 }
 

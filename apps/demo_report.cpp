@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/html_text.h"
+#include "util/json_document.h"
 #include "util/atomic_file.h"
 
 namespace glasspiv {
@@ -187,7 +188,7 @@ DemoReportFiles write_demo_report(const std::string& out_dir, const DemoSession&
   DemoReportFiles files;
   files.html = (out / "index.html").string();
   files.metrics_json = (out / "metrics.json").string();
-  write_file_atomically(files.metrics_json, j.dump(2) + "\n");
+  write_file_atomically(files.metrics_json, json_text(j));
   write_file_atomically(files.html, page);
   return files;
 }

@@ -1,6 +1,7 @@
 // glasspiv: PIV inside transparent geometry. One executable, one subcommand per task.
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 
 #include <fmt/format.h>
 
@@ -70,11 +71,22 @@ int main(int argc, char** argv) {
     return help_or_unknown(app, e);
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
+  } catch (const CLI::ConversionError& e) {
+    std::fprintf(stderr, "glasspiv: error: %s (see --help)\n", glasspiv::conversion_problem(app, e).c_str());
+    return 2;
   } catch (const CLI::ParseError& e) {
     std::fprintf(stderr, "glasspiv: error: %s (see --help)\n", e.what());
     return 2;
   } catch (const glasspiv::InputError& e) {
     std::fprintf(stderr, "glasspiv: error: %s\n", e.what());
+    return 2;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // The commands check their files first (apps/cli_files.h) and turn what the
+    // file system refuses into an InputError; one that still got here (a folder
+    // removed or made read-only during the run) is the file system's refusal of
+    // the user's file, not a bug: the path and the system's reason, exit 2.
+    std::fprintf(stderr, "glasspiv: error: %s: %s\n", e.path1().empty() ? "a file" : e.path1().c_str(),
+                 e.code().message().c_str());
     return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "glasspiv: internal error: %s\n", e.what());

@@ -70,7 +70,8 @@ std::vector<std::string> expand_photo_inputs(const std::vector<std::string>& inp
     }
     std::vector<std::string> found;
     for (const auto& entry : fs::directory_iterator(input, ec))
-      if (entry.is_regular_file() && is_image_name(entry.path())) found.push_back(entry.path().string());
+      if (std::error_code type; entry.is_regular_file(type) && is_image_name(entry.path()))
+        found.push_back(entry.path().string());
     if (found.empty()) throw InputError(input, "", "holds no images (.tif, .tiff, .png, .jpg, .jpeg, .bmp)");
     std::sort(found.begin(), found.end());
     photos.insert(photos.end(), found.begin(), found.end());
@@ -93,19 +94,10 @@ std::vector<std::string> overlay_paths(const std::vector<std::string>& photos, c
 }
 
 void check_calib_outputs(const std::vector<std::string>& inputs, const std::vector<CalibOutput>& outputs) {
-  for (const CalibOutput& out : outputs) {
-    if (out.path.empty()) continue;
-    for (const std::string& in : inputs) {
-      if (in.empty()) continue;
-      try {
-        check_not_input(in, out.path);
-      } catch (const InputError&) {
-        throw InputError(out.path, out.option,
-                         in == out.path ? "is an input of this command; glasspiv never overwrites its inputs"
-                                        : "is the input '" + in + "'; glasspiv never overwrites its inputs");
-      }
-    }
-  }
+  std::vector<OutputFile> given;
+  for (const CalibOutput& out : outputs)
+    if (!out.path.empty()) given.push_back(out);
+  check_outputs(inputs, given);
 }
 
 Observations detect_in_photos(const std::vector<std::string>& photos, const TargetSpec& spec,

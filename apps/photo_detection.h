@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "apps/cli_files.h"
+
 #include "calib/observations.h"
 #include "targets/target_spec.h"
 
@@ -27,15 +29,12 @@ std::vector<std::string> expand_photo_inputs(const std::vector<std::string>& inp
 // Empty when overlay_dir is "".
 std::vector<std::string> overlay_paths(const std::vector<std::string>& photos, const std::string& overlay_dir);
 
-// A file or folder a calib command writes, and the option that names it.
-struct CalibOutput {
-  std::string path;
-  std::string option;  // "-o", "--report", "--overlay-dir", ...
-};
+// A file or folder a calib command writes, the option that names it ("-o",
+// "--report", "--overlay-dir", ...) and its kind (OutputKind::folder for a folder).
+using CalibOutput = OutputFile;
 
-// Before any detection or fit: InputError(output, option, ...) if an output is
-// one of the inputs (by filesystem identity, apps/cli_files.h check_not_input):
-// glasspiv never overwrites its inputs. Empty paths are skipped.
+// Before any detection or fit: apps/cli_files.h check_outputs of the outputs
+// given (empty paths are skipped) against the inputs (empty ones skipped).
 void check_calib_outputs(const std::vector<std::string>& inputs, const std::vector<CalibOutput>& outputs);
 
 // Detects `spec` in every photo. `target_path` names the spec in errors.

@@ -53,10 +53,10 @@ void run_piv(const PivCommandOptions& o) {
   const PivOptions options = library_options(o);
   std::vector<std::string> inputs{o.frame_a, o.frame_b};
   if (!o.mask.empty()) inputs.push_back(o.mask);
-  std::vector<OutputFile> outputs{{o.output, "-o"}};
+  std::vector<OutputFile> outputs{{o.output, "-o", OutputKind::text}};
   if (!o.vtk.empty()) {
     if (lower_extension(o.vtk) != ".vtk") throw InputError(o.vtk, "--vtk", "must end in .vtk");
-    outputs.push_back({o.vtk, "--vtk"});
+    outputs.push_back({o.vtk, "--vtk", OutputKind::text});
   }
   check_outputs(inputs, outputs);
 

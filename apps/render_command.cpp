@@ -124,8 +124,8 @@ void run_render(const RenderOptions& o) {
   if (!o.sheet_texture.empty()) inputs.push_back(o.sheet_texture);
   std::vector<OutputFile> outputs;
   for (const Job& j : jobs) {
-    outputs.push_back({j.output, "-o"});
-    if (!j.map.empty()) outputs.push_back({j.map, "--map"});
+    outputs.push_back({j.output, "-o", OutputKind::image});
+    if (!j.map.empty()) outputs.push_back({j.map, "--map", OutputKind::transport_map});
   }
   check_outputs(inputs, outputs);
   check_sheet_picture(o, scene);

@@ -20,6 +20,7 @@
 #include "piv/vector_file.h"
 #include "sim/piv_experiment.h"
 #include "sim/vtk_flow_file.h"
+#include "util/json_document.h"
 #include "util/atomic_file.h"
 #include "util/image_file.h"
 #include "util/input_error.h"
@@ -223,7 +224,7 @@ void run_simulate(const SimulateOptions& o) {
   const fs::path dir(o.output);
   std::vector<std::string> inputs = scene_input_files(cs.scene);
   if (!vtk_file.empty()) inputs.push_back(vtk_file);
-  std::vector<OutputFile> outputs;
+  std::vector<OutputFile> outputs = {{o.output, "-o", OutputKind::folder}};
   for (int ci : indices) {
     const std::string& n = cs.scene.cameras[static_cast<std::size_t>(ci)].name;
     for (const char* suffix : {"_A.tif", "_B.tif", "_A_ref.tif", "_B_ref.tif", "_truth_px.txt"})
@@ -231,7 +232,6 @@ void run_simulate(const SimulateOptions& o) {
   }
   outputs.push_back({(dir / "truth_sheet_mm.txt").string(), "-o"});
   outputs.push_back({(dir / "metadata.json").string(), "-o"});
-  if (fs::exists(dir) && !fs::is_directory(dir)) throw InputError(o.output, "-o", "exists and is not a folder");
   check_outputs(inputs, outputs);
 
   std::vector<ExperimentCamera> cameras;
@@ -360,10 +360,10 @@ void run_simulate(const SimulateOptions& o) {
        "compared with the optics' depth of field"},
       {"warnings", e.warnings},
       {"cameras", cams}};
-  const std::string meta_text = meta.dump(2) + "\n";
+  const std::string meta_text = json_text(meta);
   writers.push_back({(dir / "metadata.json").string(),
                      [meta_text](const std::string& tmp) { write_file_atomically(tmp, meta_text); }});
-  fs::create_directories(dir);
+  make_output_folder(dir.string(), "-o");
   write_files_atomically(writers);
   for (const std::string& w : e.warnings) std::fprintf(stderr, "glasspiv: warning: %s\n", w.c_str());
   std::printf("simulated %zu tracers (%.4g per mm^3), largest displacement %.3g px, in %.2f s; wrote %s\n", e.tracers,

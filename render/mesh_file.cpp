@@ -15,6 +15,7 @@
 
 #include "render/scene.h"
 #include "util/input_error.h"
+#include "util/input_file.h"
 
 namespace glasspiv {
 
@@ -149,9 +150,7 @@ std::string lower(std::string s) {
 
 MeshArrays read_mesh_arrays(const std::string& path, const MeshPlacement& placement, bool with_normals) {
   auto fail = [&](const std::string& reason) { throw InputError(path, "", reason); };
-  std::error_code ec;
-  if (!fs::exists(path, ec)) fail("the mesh file does not exist");
-  if (fs::is_directory(path, ec)) fail("is a folder, not a mesh file");
+  check_input_file(path);  // a regular file (a fifo would block the importer)
   const std::string ext = lower(fs::path(path).extension().string());
   if (ext != ".stl" && ext != ".obj" && ext != ".ply")
     fail("unsupported mesh file type '" + ext + "' (STL, OBJ or PLY: .stl, .obj, .ply)");

@@ -33,6 +33,7 @@
 #include <vtkXMLUnstructuredGridReader.h>
 
 #include "util/input_error.h"
+#include "util/input_file.h"
 
 namespace glasspiv {
 namespace {
@@ -419,8 +420,7 @@ std::shared_ptr<const VtkFlow> read_vtk_flow(const std::string& path, const VtkF
   if (!(options.mm_per_file_length > 0) || !std::isfinite(options.mm_per_file_length) ||
       !std::isfinite(options.m_per_s_per_file_velocity))
     throw InputError(path, "", "length and velocity units must be finite, the length unit > 0");
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path, "", "no such file");
+  check_input_file(path);  // a regular file (a fifo would block the VTK reader)
   const std::string ext = std::filesystem::path(path).extension().string();
   if (ext != ".vti" && ext != ".vtu" && ext != ".vtk")
     throw InputError(path, "", "unknown extension '" + ext + "' (expected .vti, .vtu or .vtk)");

@@ -18,6 +18,7 @@
 #include "calib/camera_model.h"
 #include "util/atomic_file.h"
 #include "util/input_error.h"
+#include "util/json_document.h"
 #include "util/text_number.h"
 #include "util/yaml_fields.h"
 
@@ -169,107 +170,9 @@ std::string format_yaml(const Observations& o) {
 
 // ---------------------------------------------------------------- JSON
 
-constexpr int kMaxJsonDepth = 64;
-
-// Builds the document like json::parse, but refuses a key given twice in an
-// object (json::parse keeps the last), a number beyond a double's range
-// ("1e999") and nesting deeper than kMaxJsonDepth, each as an InputError
-// naming the file and the field.
-class JsonBuilder : public nlohmann::json_sax<nlohmann::json> {
- public:
-  using json = nlohmann::json;
-  JsonBuilder(const std::string& path, json& root) : path_(path), root_(root) {}
-
-  bool null() override { return add(nullptr); }
-  bool boolean(bool v) override { return add(v); }
-  bool number_integer(number_integer_t v) override { return add(v); }
-  bool number_unsigned(number_unsigned_t v) override { return add(v); }
-  bool number_float(number_float_t v, const string_t&) override { return add(v); }
-  bool string(string_t& v) override { return add(v); }
-  bool binary(binary_t& v) override { return add(json::binary(v)); }
-  bool start_object(std::size_t) override { return open(json::object()); }
-  bool start_array(std::size_t) override { return open(json::array()); }
-  bool end_object() override { return close(); }
-  bool end_array() override { return close(); }
-  bool key(string_t& k) override {
-    if (open_.back().value->contains(k)) throw InputError(path_, child_field(k), "appears twice in the object");
-    key_ = k;
-    return true;
-  }
-  bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception& e) override {
-    std::string what = e.what();
-    // "[json.exception.out_of_range.406] number overflow parsing '1e999'"
-    if (const std::size_t bracket = what.find("] "); what.rfind("[json.exception.", 0) == 0 && bracket != std::string::npos)
-      what = what.substr(bracket + 2);
-    if (e.id == 406)
-      throw InputError(path_, pending_field(),
-                       fmt::format("at byte {}: {} (a number must lie within a double's range, about 1.8e308)",
-                                   position, what));
-    throw InputError(path_, pending_field(), fmt::format("malformed JSON at byte {}: {}", position, what));
-  }
-
- private:
-  struct Open {
-    json* value;
-    std::string field;
-  };
-  std::string child_field(const std::string& key) const {
-    const std::string& parent = open_.back().field;
-    return parent.empty() ? key : parent + "." + key;
-  }
-  // The field of the value that comes next.
-  std::string pending_field() const {
-    if (open_.empty()) return "";
-    const json& parent = *open_.back().value;
-    if (parent.is_array()) return fmt::format("{}[{}]", open_.back().field, parent.size());
-    return key_.empty() ? open_.back().field : child_field(key_);
-  }
-  // Places `v` where the next value goes; returns where it went.
-  json* place(json&& v, std::string* field) {
-    *field = pending_field();
-    if (open_.empty()) {
-      root_ = std::move(v);
-      return &root_;
-    }
-    json& parent = *open_.back().value;
-    if (parent.is_array()) {
-      parent.push_back(std::move(v));
-      return &parent.back();
-    }
-    json& slot = parent[key_];
-    slot = std::move(v);
-    key_.clear();
-    return &slot;
-  }
-  bool add(json&& v) {
-    std::string field;
-    place(std::move(v), &field);
-    return true;
-  }
-  bool open(json&& v) {
-    std::string field;
-    json* at = place(std::move(v), &field);
-    if (open_.size() >= static_cast<std::size_t>(kMaxJsonDepth))
-      throw InputError(path_, field, fmt::format("nested more than {} levels deep", kMaxJsonDepth));
-    open_.push_back({at, field});
-    return true;
-  }
-  bool close() {
-    open_.pop_back();
-    return true;
-  }
-
-  const std::string& path_;
-  json& root_;
-  std::vector<Open> open_;
-  std::string key_;
-};
-
 Observations parse_json(std::string_view contents, const std::string& path) {
   using nlohmann::json;
-  json root;
-  JsonBuilder builder(path, root);
-  json::sax_parse(contents, &builder);
+  json root = parse_json_document(contents, path);
   auto fail = [&](const std::string& field, const std::string& problem) -> void {
     throw InputError(path, field, problem);
   };

@@ -7,6 +7,7 @@
 
 #include "util/image_file.h"
 #include "util/input_error.h"
+#include "util/input_file.h"
 
 namespace glasspiv {
 
@@ -25,10 +26,7 @@ cv::Mat to_gray8(const cv::Mat& image) {
 }
 
 cv::Mat read_photo_gray8(const std::string& path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(path, "", "file does not exist");
-  if (fs::is_directory(path, ec)) throw InputError(path, "", "is a folder, expected an image");
+  check_input_file(path);  // a regular file (a fifo would block the reader)
   // util/image_file's reader, as for PIV frames: the size limits are checked
   // from the header, damaged or truncated files are refused, nothing is printed.
   StoredImage stored;

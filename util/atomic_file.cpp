@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include "util/input_error.h"
+#include "util/input_file.h"
 
 namespace glasspiv {
 namespace fs = std::filesystem;
@@ -241,14 +242,22 @@ void write_file_atomically(const std::string& path, std::string_view contents) {
 }
 
 std::string read_file(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(path, "", "file does not exist");
-  if (fs::is_directory(path, ec)) throw InputError(path, "", "is a folder, expected a file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
+  const int fd = open_input_file(path);  // a regular file, or a one-line InputError (a fifo never blocks)
+  std::string contents;
+  char block[1 << 16];
+  for (;;) {
+    const ssize_t got = ::read(fd, block, sizeof block);
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) {
+      const int error = errno;
+      ::close(fd);
+      throw InputError(path, "", std::string("cannot read: ") + std::strerror(error));
+    }
+    if (got == 0) break;
+    contents.append(block, static_cast<std::size_t>(got));
+  }
+  ::close(fd);
+  return contents;
 }
 
 }  // namespace glasspiv

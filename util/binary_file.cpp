@@ -1,11 +1,13 @@
 #include "util/binary_file.h"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 
 #include "util/atomic_file.h"
+#include "util/input_file.h"
 
 namespace glasspiv {
 
@@ -129,10 +131,12 @@ std::string offsets_problem(const std::vector<std::uint32_t>& offsets, std::uint
 // ---------------------------------------------------------------- reading
 
 BinaryFileReader::BinaryFileReader(const std::string& path) : path_(path) {
-  file_.reset(std::fopen(path.c_str(), "rb"));
+  const int fd = open_input_file(path);  // a regular file, or a one-line InputError
+  file_.reset(::fdopen(fd, "rb"));
   if (!file_) {
-    if (errno == ENOENT) throw InputError(path, "", "file does not exist");
-    throw InputError(path, "", std::string("cannot open: ") + std::strerror(errno));
+    const int error = errno;
+    ::close(fd);
+    throw InputError(path, "", std::string("cannot open: ") + std::strerror(error));
   }
   struct stat st {};
   if (::fstat(::fileno(file_.get()), &st) != 0)

@@ -21,6 +21,7 @@
 
 #include "util/atomic_file.h"
 #include "util/input_error.h"
+#include "util/input_file.h"
 
 namespace glasspiv {
 namespace fs = std::filesystem;
@@ -159,9 +160,7 @@ void check_png_header(const std::string& path) {
 // Opens `path` for reading, refused past the limits before anything is read
 // beyond the header. The caller holds a QuietStderr.
 std::unique_ptr<OIIO::ImageInput> open_checked(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError(path, "", "file does not exist");
-  if (fs::is_directory(path, ec)) throw InputError(path, "", "is a folder, expected an image file");
+  check_input_file(path);  // a regular file: a fifo or a device is refused, never opened
   check_png_header(path);
 
   OIIO::ImageSpec config;
