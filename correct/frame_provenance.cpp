@@ -13,6 +13,10 @@ nlohmann::json as_json(const FrameProvenance& record) {
 
 // "key" of the setup, named for a person reading why a frame is redone.
 std::string what_changed(const std::string& key, const std::string& was, const std::string& now) {
+  if (key.rfind("operator ", 0) == 0 || key.rfind("weight ", 0) == 0) {
+    if (was.empty()) return "made without camera '" + key.substr(key.find(' ') + 1) + "'";
+    if (now.empty()) return "made with camera '" + key.substr(key.find(' ') + 1) + "' too";
+  }
   if (key.rfind("operator ", 0) == 0)
     return "the correction operator of camera '" + key.substr(9) +
            "' changed (scene, calibration, pose, tracing or grid)";
@@ -43,14 +47,18 @@ std::string provenance_difference(const std::string& stored, const FrameProvenan
     return out;
   };
   // The setup first (it redoes a whole series): the operators (the scene and
-  // the cameras, whose change may change other settings too), then the rest.
+  // the cameras, whose change may change other settings too), then settings
+  // both records hold (a changed method, before the options only one of the
+  // methods has), then settings only one holds.
   const std::map<std::string, std::string> was = strings(s, "setup"), now = strings(w, "setup");
   for (const bool operators : {true, false})
     for (const auto& [key, value] : now) {
-      if ((key.rfind("operator ", 0) == 0) != operators) continue;
       const auto it = was.find(key);
-      if (it == was.end() || it->second != value) return what_changed(key, it == was.end() ? "" : it->second, value);
+      if ((key.rfind("operator ", 0) == 0) == operators && it != was.end() && it->second != value)
+        return what_changed(key, it->second, value);
     }
+  for (const auto& [key, value] : now)
+    if (!was.count(key)) return what_changed(key, "", value);
   for (const auto& [key, value] : was)
     if (!now.count(key)) return what_changed(key, value, "");
   const std::map<std::string, std::string> in_was = strings(s, "inputs"), in_now = strings(w, "inputs");

@@ -41,14 +41,27 @@ TEST(FrameProvenance, EveryDifferenceIsNamed) {
             "the correction operator of camera 'cam0' changed (scene, calibration, pose, tracing or grid)");
   FrameProvenance lsq = record();
   lsq.setup["method"] = "lsq";
+  lsq.setup["max iterations"] = "100";  // an option of the new method only: the method is named
   lsq.setup["smoothness"] = "0.01";
   EXPECT_EQ(provenance_difference(stored, lsq), "made with method accumulate, now lsq");
+  EXPECT_EQ(provenance_difference(provenance_text(lsq), record()), "made with method lsq, now accumulate");
+  FrameProvenance smoother = lsq;
+  smoother.setup["smoothness"] = "0.1";
+  EXPECT_EQ(provenance_difference(provenance_text(lsq), smoother), "made with smoothness 0.01, now 0.1");
+  FrameProvenance two = record();
+  two.setup["operator cam1"] = "00000000000000ff";
+  two.setup["weight cam1"] = "1";
+  EXPECT_EQ(provenance_difference(stored, two), "made without camera 'cam1'");
   FrameProvenance as_float = record();
   as_float.setup["format"] = "float32";
   EXPECT_EQ(provenance_difference(stored, as_float), "made with format uint16, now float32");
-  FrameProvenance fewer = record();
-  fewer.setup.erase("weight cam0");
-  EXPECT_EQ(provenance_difference(stored, fewer), "made with weight cam0 1");
+  FrameProvenance extra = as_float;  // a setting only the stored record has is named after a changed one
+  extra.setup["min pixels"] = "0.25";
+  EXPECT_EQ(provenance_difference(provenance_text(extra), record()), "made with format float32, now uint16");
+  EXPECT_EQ(provenance_difference(provenance_text(extra), as_float), "made with min pixels 0.25");
+  FrameProvenance more = record();
+  more.setup["min pixels"] = "0.25";
+  EXPECT_EQ(provenance_difference(stored, more), "made without min pixels");
   FrameProvenance touched = record();
   touched.inputs["cam0"] = "f1.tif, 1000 bytes, modified 1700000001.000000001";
   EXPECT_EQ(provenance_difference(stored, touched), "its input frame changed (camera 'cam0')");
