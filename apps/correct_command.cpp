@@ -284,7 +284,7 @@ SeriesRecords check_series(const std::vector<std::size_t>& frames, const std::ve
     sr.record[i] = provenance_text(wanted);
     std::error_code ec;
     if (!fs::exists(fs::symlink_status(outputs[i], ec))) continue;  // not written yet
-    const auto header = read_image_file_header(outputs[i]);
+    const auto header = read_image_file_header(outputs[i], true);
     std::string why;
     if (!header || !header->pixels_present) why = "incomplete or unreadable";
     else if (header->width != width || header->height != height) why = "of another size";

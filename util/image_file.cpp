@@ -294,7 +294,7 @@ std::optional<std::array<int, 2>> image_file_size(const std::string& path) {
   return std::array<int, 2>{header->width, header->height};
 }
 
-std::optional<ImageFileHeader> read_image_file_header(const std::string& path) {
+std::optional<ImageFileHeader> read_image_file_header(const std::string& path, bool check_end) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return std::nullopt;
   const std::uintmax_t file_bytes = fs::file_size(path, ec);
@@ -328,7 +328,7 @@ std::optional<ImageFileHeader> read_image_file_header(const std::string& path) {
   // The last row (or tile) read back: a file cut short loses its end, and
   // the pixels come last in a file (as OIIO writes TIFF: the directory first).
   // Reading one strip or tile is cheap next to the frame.
-  if (spec.width > 0 && spec.height > 0 && file_bytes > 0) {
+  if (check_end && spec.width > 0 && spec.height > 0 && file_bytes > 0) {
     std::vector<unsigned char> buffer;
     bool read = false;
     if (spec.tile_width > 0) {

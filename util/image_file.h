@@ -58,19 +58,19 @@ GrayImage read_gray_image(const std::string& path);
 // std::nullopt when the file is missing or not an image OIIO opens.
 std::optional<std::array<int, 2>> image_file_size(const std::string& path);
 
-// What an image file's header says, and whether its pixels reach the end,
-// without reading the image; std::nullopt when the file is missing or not an
-// image OIIO opens.
+// What an image file's header says, without reading its pixels, and with
+// check_end whether its last row reads back (one strip or tile of a TIFF; a
+// PNG or a single-strip TIFF reads whole); std::nullopt when the file is
+// missing or not an image OIIO opens.
 struct ImageFileHeader {
   int width = 0, height = 0, channels = 0;
   std::string sample_type;     // as stored: "uint8", "uint16", "half", "float", "int32", ...
   std::string description;     // the file's ImageDescription ("" if none): see write_gray_image
-  // false when the file's last row (or tile) cannot be read: cut short (a
-  // power loss, an interrupted copy) or damaged at its end. Reads that one
-  // strip or tile, not the whole image.
+  // With check_end, false when the file's last row (or tile) cannot be read:
+  // cut short (a power loss, an interrupted copy) or damaged at its end.
   bool pixels_present = true;
 };
-std::optional<ImageFileHeader> read_image_file_header(const std::string& path);
+std::optional<ImageFileHeader> read_image_file_header(const std::string& path, bool check_end = false);
 
 // The file type comes from the extension: .tif/.tiff (uncompressed), .png, .exr
 // (zip, lossless). uint8/uint16 store round(clamp(v, 0, 1) * 255 resp. 65535),
