@@ -3,6 +3,7 @@
 // onto the rectified sheet grid; several cameras onto the sheet grid), and
 // glasspiv coverage: which parts of the sheet a set of cameras can reconstruct.
 #include <glob.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <climits>
@@ -23,6 +24,7 @@
 #include "apps/correction_setup.h"
 #include "apps/photo_detection.h"
 #include "correct/back_projector.h"
+#include "correct/frame_provenance.h"
 #include "correct/reconstruct.h"
 #include "correct/series.h"
 #include "util/atomic_file.h"
@@ -63,6 +65,17 @@ LeastSquaresOptions least_squares_options(const CorrectOptions& o) {
   lsq.smoothness = o.smoothness;
   lsq.max_iterations = o.max_iterations;
   return lsq;
+}
+
+// Least squares on one frame, its refusal (no finite pixel, overflow) named by the frame.
+std::vector<float> least_squares_of_frame(const std::vector<CameraImage>& views, const std::vector<CellState>& states,
+                                          const std::vector<float>& start, const LeastSquaresOptions& lsq,
+                                          const std::string& frame, LeastSquaresReport* report = nullptr) {
+  try {
+    return least_squares(views, states, start, lsq, report);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(frame, "--method lsq", e.what());
+  }
 }
 
 SheetGrid grid_for(const CorrectionScene& cs, double mm_per_px) {
@@ -129,14 +142,49 @@ void check_frame_headers(const std::vector<std::string>& paths, const Correction
   const SceneCamera& sc = cs.scene.cameras[static_cast<std::size_t>(camera_index)];
   const CameraModel model = binning > 1 ? binned(sc.camera.model, binning) : sc.camera.model;
   for (const std::string& path : paths) {
-    const auto size = image_file_size(path);
-    if (!size) read_gray_image(path);  // throws the reader's one-line error
-    if (!size || (*size)[0] != model.width_px() || (*size)[1] != model.height_px())
+    const auto header = read_image_file_header(path);
+    if (!header) read_gray_image(path);  // throws the reader's one-line error
+    const int w = header ? header->width : 0, h = header ? header->height : 0;
+    if (!header || w != model.width_px() || h != model.height_px())
       throw InputError(path, "image size",
-                       fmt::format("{}x{} px, but camera '{}' records {}x{} px{}", size ? (*size)[0] : 0,
-                                   size ? (*size)[1] : 0, sc.name, model.width_px(), model.height_px(),
-                                   binning > 1 ? fmt::format(" (binned {}x{})", binning, binning) : ""));
+                       fmt::format("{}x{} px, but camera '{}' records {}x{} px{}", w, h, sc.name, model.width_px(),
+                                   model.height_px(), binning > 1 ? fmt::format(" (binned {}x{})", binning, binning) : ""));
+    // Other integer types are rescaled by the reader (counts / their maximum): the frame's scale would be lost.
+    const std::string& type = header->sample_type;
+    if (type != "uint8" && type != "uint16" && type != "half" && type != "float" && type != "double")
+      throw InputError(path, "",
+                       fmt::format("{} pixels: glasspiv correct reads 8- or 16-bit or float frames, whose scale it "
+                                   "keeps (convert the frames, e.g. to float TIFF)",
+                                   type));
   }
+}
+
+// A float frame is written as 16 bits only when it lies in [0, 1], the scale of
+// 16-bit files (0..65535): counts would saturate.
+void check_sixteen_bit_scale(const GrayImage& img, const std::string& path, PixelFormat format) {
+  if (format != PixelFormat::uint16 || img.source_format != PixelFormat::float32) return;
+  float lo = 0, hi = 0;
+  bool any = false;
+  for (float v : img.values)
+    if (std::isfinite(v)) {
+      lo = any ? std::min(lo, v) : v;
+      hi = any ? std::max(hi, v) : v;
+      any = true;
+    }
+  if (any && (lo < 0 || hi > 1))
+    throw InputError(path, "--format",
+                     fmt::format("float pixels from {} to {}, but 16-bit output holds 0 to 1 (as 0 to 65535) and would "
+                                 "clip them: give --format float to keep the frames' scale",
+                                 number(lo), number(hi)));
+}
+
+// Non-finite pixels of a frame are left out of the reconstruction (correct/reconstruct.h);
+// a frame with none finite has nothing to correct.
+std::size_t check_finite(const GrayImage& img, const std::string& path) {
+  const std::size_t bad = count_non_finite(img.values.data(), img.values.size());
+  if (bad == img.values.size())
+    throw InputError(path, "", "no pixel is finite (all NaN or infinite): nothing to correct");
+  return bad;
 }
 
 std::vector<float> mask_values(const std::vector<CellState>& states) {
@@ -146,16 +194,7 @@ std::vector<float> mask_values(const std::vector<CellState>& states) {
 }
 
 void write_grid_placement(const std::string& path, const SheetGrid& g, const CorrectionScene& cs) {
-  const SheetGridPlacement w = sheet_grid_placement(g, cs.trace.sheet);
-  auto v3 = [](const Eigen::Vector3d& v) { return fmt::format("[{:.17g}, {:.17g}, {:.17g}]", v.x(), v.y(), v.z()); };
-  write_file_atomically(
-      path, fmt::format("# glasspiv sheet grid (docs/correction.md): image column c, row r is the sheet point\n"
-                        "# s = s0_mm + c * mm_per_px, t = t0_mm - r * mm_per_px, in the world\n"
-                        "# cell00_centre_mm + c * col_step_mm + r * row_step_mm.\n"
-                        "glasspiv_sheet_grid: 1\nscene: {}\ncols: {}\nrows: {}\nmm_per_px: {:.17g}\ns0_mm: {:.17g}\n"
-                        "t0_mm: {:.17g}\ncell00_centre_mm: {}\ncol_step_mm: {}\nrow_step_mm: {}\n",
-                        cs.scene.source, g.cols, g.rows, g.mm_per_px, g.s0_mm, g.t0_mm, v3(w.cell00_centre_mm),
-                        v3(w.col_step_mm), v3(w.row_step_mm)));
+  write_file_atomically(path, sheet_grid_yaml(g, cs.trace.sheet, cs.scene.source));
 }
 
 void print_coverage(const CellCounts& n, const char* what) {
@@ -183,6 +222,99 @@ std::vector<std::string> output_names(const std::vector<std::string>& inputs, co
 struct Frame {
   std::vector<GrayImage> images;  // per camera
   std::vector<float> result;
+};
+
+// An input frame's identity in a provenance record: name, bytes, modification time.
+std::string input_identity(const std::string& path) {
+  struct stat st{};
+  if (::stat(path.c_str(), &st) != 0) throw InputError(path, "", "cannot read the file's status");
+  return fmt::format("{}, {} bytes, modified {}.{:09d}", fs::path(path).filename().string(),
+                     static_cast<long long>(st.st_size), static_cast<long long>(st.st_mtim.tv_sec),
+                     static_cast<long>(st.st_mtim.tv_nsec));
+}
+
+std::string fingerprint_text(std::uint64_t fp) { return fmt::format("{:016x}", fp); }
+
+// The setup part of every frame's record: what changes the pixels of a series
+// (numbers in their shortest form that reads back exactly).
+std::map<std::string, std::string> series_setup(const CorrectOptions& o, const CorrectionScene& cs, const SheetGrid& grid,
+                                                PixelFormat format, const std::vector<double>& weights) {
+  std::map<std::string, std::string> setup;
+  for (std::size_t k = 0; k < cs.cameras.size(); ++k) {
+    setup["operator " + cs.cameras[k].name] = fingerprint_text(cs.cameras[k].op_fingerprint);
+    setup["weight " + cs.cameras[k].name] = fmt::format("{}", weights.empty() ? 1.0 : weights[k]);
+  }
+  setup["method"] = o.method;
+  if (o.method == "lsq") {
+    const LeastSquaresOptions lsq = least_squares_options(o);
+    setup["smoothness"] = fmt::format("{}", lsq.smoothness);
+    setup["max iterations"] = std::to_string(lsq.max_iterations);
+    setup["tolerance"] = fmt::format("{}", lsq.tolerance);
+  }
+  setup["grid"] = o.grid;
+  setup["sheet grid"] = fmt::format("{}x{} cells of {} mm, cell (0, 0) at s {}, t {}", grid.cols, grid.rows,
+                                    grid.mm_per_px, grid.s0_mm, grid.t0_mm);
+  setup["format"] = pixel_format_name(format);
+  setup["min pixels"] = fmt::format("{}", o.min_pixels);
+  setup["min weight"] = fmt::format("{}", o.min_weight);
+  setup["background radiance"] = fmt::format("{}", cs.scene.background.radiance);
+  return setup;
+}
+
+// Which outputs of a series are kept on a rerun: those whose record is the one
+// this run would write, complete and of the right size. Every other existing
+// output is redone, and why is counted.
+struct SeriesRecords {
+  std::vector<char> keep;           // per frame index
+  std::vector<std::string> record;  // per frame index to do: the text written into it
+  std::map<std::string, std::size_t> redo;
+  std::size_t redone() const {
+    std::size_t n = 0;
+    for (const auto& r : redo) n += r.second;
+    return n;
+  }
+  std::string why() const {
+    std::string text;
+    for (const auto& [reason, n] : redo) text += fmt::format("{}{} {}", text.empty() ? "" : "; ", n, reason);
+    return text;
+  }
+};
+
+// inputs(i): per camera name, the input file of frame i.
+SeriesRecords check_series(const std::vector<std::size_t>& frames, const std::vector<std::string>& outputs, int width,
+                           int height, const std::map<std::string, std::string>& setup,
+                           const std::function<std::map<std::string, std::string>(std::size_t)>& inputs) {
+  SeriesRecords sr;
+  sr.keep.assign(outputs.size(), 0);
+  sr.record.resize(outputs.size());
+  for (std::size_t i : frames) {
+    FrameProvenance wanted{setup, {}};
+    for (const auto& [camera, path] : inputs(i)) wanted.inputs[camera] = input_identity(path);
+    sr.record[i] = provenance_text(wanted);
+    std::error_code ec;
+    if (!fs::exists(fs::symlink_status(outputs[i], ec))) continue;  // not written yet
+    const auto header = read_image_file_header(outputs[i], true);
+    std::string why;
+    if (!header || !header->pixels_present) why = "incomplete or unreadable";
+    else if (header->width != width || header->height != height) why = "of another size";
+    else if (header->description != sr.record[i]) why = provenance_difference(header->description, wanted);
+    if (why.empty()) sr.keep[i] = 1;
+    else ++sr.redo[why];
+  }
+  if (sr.redone()) std::printf("redoing %s written before: %s\n", count_of(sr.redone(), "frame").c_str(), sr.why().c_str());
+  return sr;
+}
+
+// What a series left out: non-finite input pixels, and the valid cells they leave without data.
+struct LeftOut {
+  std::size_t pixels = 0, frames = 0, cells = 0;
+  std::string text(PixelFormat format) const {
+    if (!pixels) return "";
+    return fmt::format("; left out {} not finite in {}{}", count_of(pixels, "pixel"), count_of(frames, "frame"),
+                       cells ? fmt::format(" ({} without data: {})", count_of(cells, "cell"),
+                                           format == PixelFormat::float32 ? "NaN" : "0")
+                             : "");
+  }
 };
 
 void run_one_camera(const CorrectOptions& o) {
@@ -255,29 +387,36 @@ void run_one_camera(const CorrectOptions& o) {
   if (prepared && on_camera) read_cells = cells_read_by(resampler, grid.cell_count());
   const BackProjector projector =
       prepared ? make_back_projector(camera_operators(cs), states, on_camera ? &read_cells : nullptr) : BackProjector{};
+  const SeriesRecords records =
+      check_series(frames, outputs, out_w, out_h, series_setup(o, cs, grid, format, {}),
+                   [&](std::size_t i) { return std::map<std::string, std::string>{{cam.name, inputs[i]}}; });
+  LeftOut left_out;
   ProgressBar bar("correct", frames.size(), "frames");
   const SeriesStats st = run_series<Frame>(
-      frames,
-      [&](std::size_t i) {
-        const auto size = image_file_size(outputs[i]);
-        return size && (*size)[0] == out_w && (*size)[1] == out_h;
-      },
+      frames, [&](std::size_t i) { return records.keep[i] != 0; },
       [&](std::size_t i) {
         Frame f;
         f.images.push_back(read_gray_image(inputs[i]));
         check_frame_size(f.images[0], inputs[i], cam);
+        check_sixteen_bit_scale(f.images[0], inputs[i], format);
         return f;
       },
-      [&](std::size_t, Frame& f) {
+      [&](std::size_t i, Frame& f) {
         const std::vector<CameraImage> views = {{&cam.op, f.images[0].values.data(), 1.0, background}};
+        const std::size_t non_finite = check_finite(f.images[0], inputs[i]);
         std::vector<float> l;
-        if (prepared) {
+        if (prepared && non_finite == 0) {
           l.assign(grid.cell_count(), 0.0f);
           apply_back_projector(projector, f.images[0].values.data(), l.data());
         } else {
-          l = back_projection(views, states);
+          l = back_projection(views, states);  // leaves the non-finite pixels out
         }
-        if (least) l = least_squares(views, states, l, lsq);
+        if (least) l = least_squares_of_frame(views, states, l, lsq, inputs[i]);
+        if (non_finite) {
+          left_out.pixels += non_finite;
+          ++left_out.frames;
+          for (std::size_t c = 0; c < l.size(); ++c) left_out.cells += states[c] == CellState::valid && std::isnan(l[c]);
+        }
         if (on_camera) {
           f.result.resize(static_cast<std::size_t>(out_w) * out_h);
           resample_to_camera(resampler, l.data(), f.result.data());
@@ -285,14 +424,18 @@ void run_one_camera(const CorrectOptions& o) {
           f.result = std::move(l);
         }
       },
-      [&](std::size_t i, const Frame& f) { write_gray_image(outputs[i], f.result.data(), out_w, out_h, format); },
+      [&](std::size_t i, const Frame& f) {
+        write_gray_image(outputs[i], f.result.data(), out_w, out_h, format, records.record[i]);
+      },
       [&](std::size_t done, std::size_t) { bar.set_done(done); });
   bar.finish();
-  std::printf("corrected %s in %.2f s (%.1f frames/s, %s, %s grid %dx%d)%s; wrote %s\n",
+  std::printf("corrected %s in %.2f s (%.1f frames/s, %s, %s grid %dx%d)%s%s%s; wrote %s\n",
               count_of(st.corrected, "frame").c_str(),
               st.seconds, st.corrected / std::max(1e-9, st.seconds), least ? "least squares" : "back-projection",
               on_camera ? "camera" : "sheet", out_w, out_h,
-              st.skipped ? fmt::format("; {} already done, skipped", st.skipped).c_str() : "", folder_shown(o.output).c_str());
+              records.redone() ? fmt::format("; redid {} written before", records.redone()).c_str() : "",
+              st.skipped ? fmt::format("; {} already done, skipped", st.skipped).c_str() : "",
+              left_out.text(format).c_str(), folder_shown(o.output).c_str());
 }
 
 void run_several_cameras(const CorrectOptions& o) {
@@ -377,8 +520,11 @@ void run_several_cameras(const CorrectOptions& o) {
               grid.mm_per_px);
   for (const auto& pc : per_camera) add_correction_camera(cs, pc.first, grid, s);
   std::vector<CameraOperator> ops = camera_operators(cs);
-  for (std::size_t k = 0; k < cs.cameras.size(); ++k)
+  std::vector<double> camera_weights;
+  for (std::size_t k = 0; k < cs.cameras.size(); ++k) {
     if (weights.count(cs.cameras[k].name)) ops[k].weight = weights.at(cs.cameras[k].name);
+    camera_weights.push_back(ops[k].weight);
+  }
   const std::vector<CellState> states = classify_cells(ops, cs.trace, s.mask);
   // Coverage count: cameras that could reconstruct each cell alone.
   std::vector<float> coverage(grid.cell_count(), 0.0f);
@@ -398,25 +544,36 @@ void run_several_cameras(const CorrectOptions& o) {
   const double background = cs.scene.background.radiance;
   const bool prepared = !least && background == 0;
   const BackProjector projector = prepared ? make_back_projector(ops, states) : BackProjector{};
+  const SeriesRecords records =
+      check_series(frames, outputs, grid.cols, grid.rows, series_setup(o, cs, grid, format, camera_weights),
+                   [&](std::size_t i) {
+                     std::map<std::string, std::string> in;
+                     for (std::size_t k = 0; k < per_camera.size(); ++k) in[cs.cameras[k].name] = per_camera[k].second[i];
+                     return in;
+                   });
+  LeftOut left_out;
   ProgressBar bar("correct", frames.size(), "frames");
   int iterations = 0;
   const SeriesStats st = run_series<Frame>(
-      frames,
-      [&](std::size_t i) {
-        const auto size = image_file_size(outputs[i]);
-        return size && (*size)[0] == grid.cols && (*size)[1] == grid.rows;
-      },
+      frames, [&](std::size_t i) { return records.keep[i] != 0; },
       [&](std::size_t i) {
         Frame f;
         for (std::size_t k = 0; k < per_camera.size(); ++k) {
           const std::string& path = per_camera[k].second[i];
           f.images.push_back(read_gray_image(path));
           check_frame_size(f.images.back(), path, cs.cameras[k]);
+          check_sixteen_bit_scale(f.images.back(), path, format);
         }
         return f;
       },
-      [&](std::size_t, Frame& f) {
-        if (prepared) {
+      [&](std::size_t i, Frame& f) {
+        std::size_t non_finite = 0;
+        for (std::size_t k = 0; k < f.images.size(); ++k) non_finite += check_finite(f.images[k], per_camera[k].second[i]);
+        if (non_finite) {
+          left_out.pixels += non_finite;
+          ++left_out.frames;
+        }
+        if (prepared && non_finite == 0) {
           std::vector<float> frame;
           frame.reserve(projector.frame_pixels);
           for (const GrayImage& im : f.images) frame.insert(frame.end(), im.values.begin(), im.values.end());
@@ -427,22 +584,28 @@ void run_several_cameras(const CorrectOptions& o) {
         std::vector<CameraImage> views;
         for (std::size_t k = 0; k < cs.cameras.size(); ++k)
           views.push_back({&cs.cameras[k].op, f.images[k].values.data(), ops[k].weight, background});
-        f.result = back_projection(views, states);
+        f.result = back_projection(views, states);  // leaves the non-finite pixels out
         if (least) {
           LeastSquaresReport rep;
-          f.result = least_squares(views, states, f.result, lsq, &rep);
+          f.result = least_squares_of_frame(views, states, f.result, lsq, per_camera.front().second[i], &rep);
           iterations += rep.iterations;
         }
+        if (non_finite)
+          for (std::size_t c = 0; c < f.result.size(); ++c)
+            left_out.cells += states[c] == CellState::valid && std::isnan(f.result[c]);
       },
-      [&](std::size_t i, const Frame& f) { write_gray_image(outputs[i], f.result.data(), grid.cols, grid.rows, format); },
+      [&](std::size_t i, const Frame& f) {
+        write_gray_image(outputs[i], f.result.data(), grid.cols, grid.rows, format, records.record[i]);
+      },
       [&](std::size_t done, std::size_t) { bar.set_done(done); });
   bar.finish();
-  std::printf("corrected %s in %.2f s (%.2f per s, %s%s)%s; mask %s, coverage count %s\n",
+  std::printf("corrected %s in %.2f s (%.2f per s, %s%s)%s%s%s; mask %s, coverage count %s\n",
               count_of(st.corrected, "instant").c_str(),
               st.seconds, st.corrected / std::max(1e-9, st.seconds), least ? "least squares" : "accumulation",
               least && st.corrected ? fmt::format(", {:.0f} iterations each", double(iterations) / st.corrected).c_str() : "",
-              st.skipped ? fmt::format("; {} already done, skipped", st.skipped).c_str() : "", mask_path.c_str(),
-              coverage_path.c_str());
+              records.redone() ? fmt::format("; redid {} written before", records.redone()).c_str() : "",
+              st.skipped ? fmt::format("; {} already done, skipped", st.skipped).c_str() : "",
+              left_out.text(format).c_str(), mask_path.c_str(), coverage_path.c_str());
 }
 
 void run_correct(const CorrectOptions& o) {

@@ -56,7 +56,7 @@ GlassRemovedView glass_removed_view(const CorrectionScene& cs, int camera_index,
 
 void add_correction_camera(CorrectionScene& cs, int camera_index, const SheetGrid& grid, const CorrectionSettings& s) {
   const SceneCamera& sc = cs.scene.cameras[static_cast<std::size_t>(camera_index)];
-  CorrectionCamera cam{sc.name, sc.field, camera_model(cs, camera_index, s), *sc.camera.camera_from_world, {}};
+  CorrectionCamera cam{sc.name, sc.field, camera_model(cs, camera_index, s), *sc.camera.camera_from_world, {}, 0};
   const CorrectionCacheFiles cache = correction_cache_files(cs.scene, camera_index, s, grid.cols, grid.rows);
   const std::string map_path = cache.map, op_path = cache.op;
   if (!s.cache_dir.empty()) {
@@ -68,8 +68,10 @@ void add_correction_camera(CorrectionScene& cs, int camera_index, const SheetGri
   // A valid cached operator needs no map.
   if (!op_path.empty()) {
     std::string why;
-    if (auto op = load_cached_correction_operator(op_path, correction_operator_fingerprint(map_fp, grid, s.op), &why)) {
+    const std::uint64_t op_fp = correction_operator_fingerprint(map_fp, grid, s.op);
+    if (auto op = load_cached_correction_operator(op_path, op_fp, &why)) {
       cam.op = std::move(*op);
+      cam.op_fingerprint = op_fp;
       if (s.report)
         std::printf("camera '%s': reused the correction operator %s (%zu entries): nothing traced or built\n",
                     cam.name.c_str(), op_path.c_str(), cam.op.entry_count());
@@ -111,6 +113,7 @@ void add_correction_camera(CorrectionScene& cs, int camera_index, const SheetGri
                 op.seconds, op.op.entry_count(), op.op.memory_bytes() / 1048576.0,
                 op.written ? (", cached in " + op_path).c_str() : "");
   cam.op = std::move(op.op);
+  cam.op_fingerprint = op.fingerprint;
   cs.cameras.push_back(std::move(cam));
 }
 

@@ -3,6 +3,7 @@
 // scene's cameras made ready for correction on one sheet grid, each with its
 // correction operator, from the caches when they are valid (an operator found
 // in its cache needs no transport map at all: nothing is traced).
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,7 @@ struct CorrectionCamera {
   CameraModel model;
   RigidTransform pose;
   CorrectionOperator op;
+  std::uint64_t op_fingerprint = 0;  // correction_operator_fingerprint: what op was built from
 };
 
 struct CorrectionScene {

@@ -1,4 +1,5 @@
 // glasspiv: PIV inside transparent geometry. One executable, one subcommand per task.
+#include <csignal>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -48,6 +49,9 @@ int help_or_unknown(CLI::App& app, const CLI::Error& e) {
 int main(int argc, char** argv) {
   // Progress lines reach a log or a pipe as they are printed, not at exit.
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  // Past a file-size limit (ulimit -f) write() fails with EFBIG instead of the
+  // process dying of SIGXFSZ: the writer reports the output and removes its temporary.
+  std::signal(SIGXFSZ, SIG_IGN);
   // Named, so usage lines read `glasspiv ...`, not the executable's full path.
   CLI::App app{"glasspiv: calibrated, ray-traced correction of PIV images taken through glass", "glasspiv"};
   app.set_version_flag("--version", std::string("glasspiv ") + GLASSPIV_VERSION);

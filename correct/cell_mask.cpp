@@ -55,11 +55,14 @@ std::vector<CellState> classify_cells(const std::vector<CameraOperator>& cameras
       bool inside = false;
       for (const Shape* s : cutting)
         if ((inside = contains(*s, p))) break;
+      // A camera's weight weighs its data in the reconstruction, never the
+      // mask: a camera that takes part (weight > 0) counts its pixels in full.
       double pixels = 0, direct = 0, weight = 0;
       for (const CameraOperator& cam : cameras) {
-        pixels += cam.weight * cam.op->cell_pixels[c];
-        direct += cam.weight * cam.op->cell_direct_pixels[c];
-        weight += cam.weight * cam.op->cell_weight[c];
+        if (!(cam.weight > 0)) continue;
+        pixels += cam.op->cell_pixels[c];
+        direct += cam.op->cell_direct_pixels[c];
+        weight += cam.op->cell_weight[c];
       }
       CellState& st = states[c];
       if (inside) st = CellState::inside_solid;

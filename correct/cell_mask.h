@@ -16,9 +16,10 @@
 //                 without a reflection, is below min_mean_weight (grazing
 //                 refractions, long paths in absorbing glass: mostly noise);
 //   valid         otherwise.
-// With several cameras the pixels and weights of all of them add (each
-// camera's weight scaling its contribution), so one camera can fill another's
-// rims.
+// With several cameras the pixels and weights of all of them add, so one
+// camera can fill another's rims. A camera's weight (CameraOperator::weight)
+// weighs its data in the reconstruction, never the mask: every camera of
+// weight > 0 counts in full, one of weight 0 is left out.
 #include <cstdint>
 #include <vector>
 
@@ -38,7 +39,7 @@ struct MaskOptions {
 
 struct CameraOperator {
   const CorrectionOperator* op = nullptr;
-  double weight = 1;  // the camera's share in a multi-camera reconstruction
+  double weight = 1;  // the camera's share in a multi-camera reconstruction (0: left out)
 };
 
 // Throws std::invalid_argument for no operators, operators on different grids,

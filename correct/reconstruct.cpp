@@ -18,14 +18,51 @@ const SheetGrid& common_grid(const std::vector<CameraImage>& images, const std::
   return grid;
 }
 
-// The image minus its background, times sqrt(w): the right-hand side of one camera.
+// The image minus its background, times sqrt(w): the right-hand side of one
+// camera; 0 at pixels that are not finite (they are left out).
 std::vector<float> data_term(const CameraImage& im) {
   const CorrectionOperator& op = *im.op;
   std::vector<float> b(op.pixel_count());
   const double sw = std::sqrt(im.weight);
   for (std::size_t p = 0; p < b.size(); ++p)
-    b[p] = static_cast<float>(sw * (im.image[p] - op.background_weight[p] * im.background_radiance));
+    b[p] = std::isfinite(im.image[p])
+               ? static_cast<float>(sw * (im.image[p] - op.background_weight[p] * im.background_radiance))
+               : 0.0f;
   return b;
+}
+
+// Per camera, 1 where the pixel is finite and 0 where it is left out; empty
+// for a camera whose pixels are all finite.
+std::vector<std::vector<float>> finite_pixels(const std::vector<CameraImage>& images) {
+  std::vector<std::vector<float>> out(images.size());
+  for (std::size_t k = 0; k < images.size(); ++k) {
+    const std::size_t n = images[k].op->pixel_count();
+    if (count_non_finite(images[k].image, n) == 0) continue;
+    out[k].resize(n);
+    for (std::size_t p = 0; p < n; ++p) out[k][p] = std::isfinite(images[k].image[p]) ? 1.0f : 0.0f;
+  }
+  return out;
+}
+
+bool any_masked(const std::vector<std::vector<float>>& finite) {
+  for (const std::vector<float>& f : finite)
+    if (!f.empty()) return true;
+  return false;
+}
+
+// Per cell, sum_c w_c sum_p A_c[p, cell] over the finite pixels: the weight of
+// the data a cell has in this frame (its cell_weight when every pixel is finite).
+std::vector<double> data_weight(const std::vector<CameraImage>& images, const std::vector<std::vector<float>>& finite) {
+  const std::size_t cells = images.front().op->grid.cell_count();
+  std::vector<double> weight(cells, 0.0);
+  std::vector<float> per_cell(cells);
+  for (std::size_t k = 0; k < images.size(); ++k) {
+    const CorrectionOperator& op = *images[k].op;
+    if (!finite[k].empty()) apply_transpose(op, finite[k].data(), per_cell.data());
+    const std::vector<float>& w = finite[k].empty() ? op.cell_weight : per_cell;
+    for (std::size_t c = 0; c < cells; ++c) weight[c] += images[k].weight * w[c];
+  }
+  return weight;
 }
 
 double squared_norm(const std::vector<float>& v) {
@@ -38,8 +75,9 @@ double squared_norm(const std::vector<float>& v) {
 // forward differences between valid neighbours (right, then down).
 class StackedOperator {
  public:
-  StackedOperator(const std::vector<CameraImage>& images, const std::vector<CellState>& states, double lambda)
-      : images_(images), grid_(images.front().op->grid), lambda_root_(std::sqrt(lambda)) {
+  StackedOperator(const std::vector<CameraImage>& images, const std::vector<CellState>& states, double lambda,
+                  const std::vector<std::vector<float>>& finite)
+      : images_(images), grid_(images.front().op->grid), lambda_root_(std::sqrt(lambda)), finite_(finite) {
     valid_.resize(states.size());
     for (std::size_t c = 0; c < states.size(); ++c) valid_[c] = states[c] == CellState::valid;
   }
@@ -61,6 +99,8 @@ class StackedOperator {
       apply_forward(*images_[k].op, x.data(), 0.0, out.camera[k].data());
       const float sw = static_cast<float>(std::sqrt(images_[k].weight));
       for (float& v : out.camera[k]) v *= sw;
+      if (!finite_[k].empty())  // a pixel left out has no row in K
+        for (std::size_t p = 0; p < out.camera[k].size(); ++p) out.camera[k][p] *= finite_[k][p];
     }
     for (int row = 0; row < grid_.rows; ++row)
       for (int col = 0; col < grid_.cols; ++col) {
@@ -102,6 +142,7 @@ class StackedOperator {
   const std::vector<CameraImage>& images_;
   const SheetGrid& grid_;
   double lambda_root_;
+  const std::vector<std::vector<float>>& finite_;
   std::vector<char> valid_;
 };
 
@@ -130,16 +171,22 @@ double camera_rms(const StackedOperator::Residual& r) {
 
 }  // namespace
 
+std::size_t count_non_finite(const float* values, std::size_t count) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < count; ++i) n += !std::isfinite(values[i]);
+  return n;
+}
+
 std::vector<float> back_projection(const std::vector<CameraImage>& images, const std::vector<CellState>& states) {
   const SheetGrid& grid = common_grid(images, states);
+  const std::vector<std::vector<float>> finite = finite_pixels(images);
+  const bool masked = any_masked(finite);
   std::vector<float> per_cell(grid.cell_count());
   std::vector<double> sum, weight;
-  if (images.size() > 1 || images[0].weight != 1 || images[0].background_radiance != 0) {
+  if (masked || images.size() > 1 || images[0].weight != 1 || images[0].background_radiance != 0)
     sum.assign(grid.cell_count(), 0.0);
-    weight.assign(grid.cell_count(), 0.0);
-  }
   // One camera of weight 1 without background (the usual PIV frame): A^T I / W in place, no copies.
-  if (images.size() == 1 && images[0].weight == 1 && images[0].background_radiance == 0) {
+  if (!masked && images.size() == 1 && images[0].weight == 1 && images[0].background_radiance == 0) {
     const CorrectionOperator& op = *images[0].op;
     apply_transpose(op, images[0].image, per_cell.data());
     for (std::size_t c = 0; c < per_cell.size(); ++c)
@@ -150,14 +197,13 @@ std::vector<float> back_projection(const std::vector<CameraImage>& images, const
     const std::vector<float> b = data_term(im);  // sqrt(w) (I - bg)
     apply_transpose(*im.op, b.data(), per_cell.data());
     const double sw = std::sqrt(im.weight);
-    for (std::size_t c = 0; c < per_cell.size(); ++c) {
-      sum[c] += sw * per_cell[c];
-      weight[c] += im.weight * im.op->cell_weight[c];
-    }
+    for (std::size_t c = 0; c < per_cell.size(); ++c) sum[c] += sw * per_cell[c];
   }
+  weight = data_weight(images, finite);
   std::vector<float> l(grid.cell_count(), 0.0f);
   for (std::size_t c = 0; c < l.size(); ++c)
     if (states[c] == CellState::valid && weight[c] > 0) l[c] = static_cast<float>(sum[c] / weight[c]);
+    else if (states[c] == CellState::valid && masked) l[c] = kNoData;  // seen by left-out pixels only
   return l;
 }
 
@@ -187,7 +233,15 @@ std::vector<float> least_squares(const std::vector<CameraImage>& images, const s
       ++valid;
     }
   mean_column = valid ? mean_column / valid : 0.0;
-  const StackedOperator k(images, states, options.smoothness * mean_column);
+  const std::vector<std::vector<float>> finite = finite_pixels(images);
+  std::size_t finite_count = 0, masked_count = 0;
+  for (std::size_t cam = 0; cam < images.size(); ++cam) {
+    const std::size_t n = images[cam].op->pixel_count(), bad = finite[cam].empty() ? 0 : count_non_finite(images[cam].image, n);
+    masked_count += bad;
+    finite_count += n - bad;
+  }
+  if (finite_count == 0) throw std::invalid_argument("least_squares: no finite pixel in any camera's image");
+  const StackedOperator k(images, states, options.smoothness * mean_column, finite);
 
   std::vector<float> x(start);
   for (std::size_t c = 0; c < x.size(); ++c)
@@ -206,7 +260,10 @@ std::vector<float> least_squares(const std::vector<CameraImage>& images, const s
   p = s;
   double gamma = squared_norm(s);
   const double gamma0 = gamma;
+  if (!std::isfinite(gamma0) || !std::isfinite(squared_norm(r)))
+    throw std::invalid_argument("least_squares: the data overflow single precision (pixel values near 1e38?)");
   LeastSquaresReport rep;
+  rep.masked_pixels = masked_count;
   rep.residual_start = camera_rms(r);
   rep.converged = gamma0 == 0;
   int it = 0;
@@ -227,6 +284,11 @@ std::vector<float> least_squares(const std::vector<CameraImage>& images, const s
   }
   rep.iterations = it;
   rep.residual_end = camera_rms(r);
+  if (any_masked(finite)) {  // a cell only left-out pixels see has no data: not the regulariser's guess
+    const std::vector<double> weight = data_weight(images, finite);
+    for (std::size_t c = 0; c < x.size(); ++c)
+      if (states[c] == CellState::valid && !(weight[c] > 0)) x[c] = kNoData;
+  }
   if (report) *report = rep;
   return x;
 }

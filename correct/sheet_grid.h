@@ -10,6 +10,7 @@
 // by sheet_grid_covering lies exactly on the grid's cells).
 #include <cstddef>
 #include <cstdint>
+#include <string>
 
 #include <Eigen/Core>
 
@@ -48,5 +49,12 @@ struct SheetGridPlacement {
   Eigen::Vector3d cell00_centre_mm, col_step_mm, row_step_mm;
 };
 SheetGridPlacement sheet_grid_placement(const SheetGrid& grid, const SheetPlane& sheet);
+
+// The text of sheet_grid.yaml (docs/correction.md, "Output grids"): a comment
+// on how to read it, then glasspiv_sheet_grid: 1, scene (scene_path), cols,
+// rows, mm_per_px, s0_mm, t0_mm, cell00_centre_mm, col_step_mm, row_step_mm,
+// numbers to 17 digits. Written by yaml-cpp's emitter, so any path (a '#', a
+// ': ', quotes, a newline) reads back as itself.
+std::string sheet_grid_yaml(const SheetGrid& grid, const SheetPlane& sheet, const std::string& scene_path);
 
 }  // namespace glasspiv

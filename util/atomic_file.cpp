@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 
+#include <fcntl.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -188,11 +189,30 @@ void prepare_folder(const std::string& path) {
   remove_stale_temporaries(target.parent_path());
 }
 
+// fsync(2) of a file or folder, so that what a rename publishes survives a power
+// loss: the temporary's data before it is renamed, the folder's entry after.
+// Filesystems that cannot sync a folder (EINVAL) are not an error.
+void sync_path(const std::string& sync, const std::string& path, bool folder) {
+  const int fd = ::open(sync.c_str(), O_RDONLY | O_CLOEXEC | (folder ? O_DIRECTORY : 0));
+  if (fd < 0) throw InputError(path, "", std::string("cannot write the output: open for fsync: ") + std::strerror(errno));
+  int result;
+  do result = ::fsync(fd);
+  while (result != 0 && errno == EINTR);
+  const int error = errno;
+  ::close(fd);
+  if (result != 0 && !(folder && (error == EINVAL || error == ENOTSUP)))
+    throw InputError(path, "", std::string("cannot write the output: fsync: ") + std::strerror(error));
+}
+
+// The temporary made durable, checked, renamed over `path`, and the rename made durable.
 void rename_into_place(const TrackedTemporary& temporary, const std::string& path) {
+  sync_path(temporary.path(), path, false);
   check_replaceable_output(path);  // again: it may have appeared while writing
   std::error_code ec;
   fs::rename(temporary.path(), path, ec);
   if (ec) throw InputError(path, "", "cannot write the output: " + ec.message());
+  const fs::path parent = fs::path(path).parent_path();
+  sync_path(parent.empty() ? "." : parent.string(), path, true);
 }
 
 }  // namespace
@@ -235,9 +255,16 @@ void write_file_atomically(const std::string& path, std::string_view contents) {
   write_file_atomically_with(path, [&](const std::string& temporary) {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     if (!out) throw InputError(path, "", std::string("cannot open for writing: ") + std::strerror(errno));
+    const auto failed = [&path]() {
+      const int error = errno;
+      return InputError(path, "", std::string("write failed: ") + (error ? std::strerror(error) : "the disk may be full"));
+    };
+    errno = 0;
     out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
     out.flush();
-    if (!out) throw InputError(path, "", "write failed (disk full?)");
+    if (!out) throw failed();
+    out.close();
+    if (!out) throw failed();
   });
 }
 

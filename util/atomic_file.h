@@ -1,11 +1,13 @@
 #pragma once
-// Outputs are written atomically: into a temporary file beside the target, then
-// renamed over it, so a crash never leaves a half-written file and an existing
-// file is only replaced by a complete one.
+// Outputs are written atomically: into a temporary file beside the target,
+// fsync'ed, then renamed over it, and the folder fsync'ed, so neither a crash
+// nor a power loss leaves a half-written file under the target's name, and an
+// existing file is only replaced by a complete one.
 //
 // Temporaries are named ".<stem>.tmp-<host>-<pid>-<random><ext>" beside the
 // target. They never outlive their writer:
-//  - a writer that throws removes its temporary;
+//  - a writer that throws, and any failure after it (fsync, rename), removes
+//    its temporary;
 //  - SIGINT, SIGTERM and SIGHUP remove every temporary in flight (a fixed table
 //    of paths unlinked by an async-signal-safe handler, which then re-raises the
 //    signal with its previous disposition);

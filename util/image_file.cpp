@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -287,8 +288,16 @@ GrayImage read_gray_image(const std::string& path) {
 }
 
 std::optional<std::array<int, 2>> image_file_size(const std::string& path) {
+  const auto header = read_image_file_header(path);
+  if (!header) return std::nullopt;
+  return std::array<int, 2>{header->width, header->height};
+}
+
+std::optional<ImageFileHeader> read_image_file_header(const std::string& path, bool check_end) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return std::nullopt;
+  const std::uintmax_t file_bytes = fs::file_size(path, ec);
+  if (ec) return std::nullopt;
   const QuietStderr quiet;  // libpng prints a damaged header's error
   const auto in = OIIO::ImageInput::open(path);
   if (!in) {
@@ -296,11 +305,48 @@ std::optional<std::array<int, 2>> image_file_size(const std::string& path) {
     return std::nullopt;
   }
   const OIIO::ImageSpec& spec = in->spec();
-  return std::array<int, 2>{spec.width, spec.height};
+  ImageFileHeader h;
+  h.width = spec.width;
+  h.height = spec.height;
+  h.channels = spec.nchannels;
+  switch (spec.format.basetype) {
+    case OIIO::TypeDesc::UINT8: h.sample_type = "uint8"; break;
+    case OIIO::TypeDesc::INT8: h.sample_type = "int8"; break;
+    case OIIO::TypeDesc::UINT16: h.sample_type = "uint16"; break;
+    case OIIO::TypeDesc::INT16: h.sample_type = "int16"; break;
+    case OIIO::TypeDesc::UINT32: h.sample_type = "uint32"; break;
+    case OIIO::TypeDesc::INT32: h.sample_type = "int32"; break;
+    case OIIO::TypeDesc::UINT64: h.sample_type = "uint64"; break;
+    case OIIO::TypeDesc::INT64: h.sample_type = "int64"; break;
+    case OIIO::TypeDesc::HALF: h.sample_type = "half"; break;
+    case OIIO::TypeDesc::FLOAT: h.sample_type = "float"; break;
+    case OIIO::TypeDesc::DOUBLE: h.sample_type = "double"; break;
+    default: h.sample_type = spec.format.c_str(); break;
+  }
+  h.description = spec.get_string_attribute("ImageDescription");
+  // The last row (or tile) read back: a file cut short loses its end, and
+  // the pixels come last in a file (as OIIO writes TIFF: the directory first).
+  // Reading one strip or tile is cheap next to the frame.
+  if (check_end && spec.width > 0 && spec.height > 0 && file_bytes > 0) {
+    std::vector<unsigned char> buffer;
+    bool read = false;
+    if (spec.tile_width > 0) {
+      buffer.resize(spec.tile_bytes(true));
+      read = in->read_tile(spec.x + ((spec.width - 1) / spec.tile_width) * spec.tile_width,
+                           spec.y + ((spec.height - 1) / spec.tile_height) * spec.tile_height, spec.z,
+                           OIIO::TypeDesc::UNKNOWN, buffer.data());
+    } else {
+      buffer.resize(spec.scanline_bytes(true));
+      read = in->read_scanline(spec.y + spec.height - 1, spec.z, OIIO::TypeDesc::UNKNOWN, buffer.data());
+    }
+    h.pixels_present = read && !in->has_error();
+    in->geterror();  // clear it
+  }
+  return h;
 }
 
 void write_gray_image(const std::string& path, const float* values, int width, int height,
-                      PixelFormat format) {
+                      PixelFormat format, const std::string& description) {
   if (values == nullptr || width <= 0 || height <= 0)
     throw std::invalid_argument("write_gray_image: empty image for " + path);
   const FileType type = file_type_for_writing(path);
@@ -331,12 +377,24 @@ void write_gray_image(const std::string& path, const float* values, int width, i
   // saves only about a quarter on noisy 16-bit recordings. EXR: zip, lossless.
   if (type == FileType::tiff) spec.attribute("compression", "none");
   if (type == FileType::exr) spec.attribute("compression", "zip");
+  if (!description.empty()) spec.attribute("ImageDescription", description);
 
   write_file_atomically_with(path, [&](const std::string& temporary) {
     const auto out = OIIO::ImageOutput::create(temporary);
     if (!out) fail(path, OIIO::geterror(), "OpenImageIO cannot write this file type", temporary);
+    errno = 0;
     if (!out->open(temporary, spec) || !out->write_image(stored, pixels) || !out->close())
-      fail(path, out->geterror(), "cannot write the image", temporary);
+      fail(path, out->geterror(), errno ? std::strerror(errno) : "cannot write the image", temporary);
+    // libtiff does not report every failed write (its last flush happens in a
+    // function without a result): a file cut short by a full disk or a file-size
+    // limit is caught here, before it is renamed into place.
+    std::error_code ec;
+    const std::uintmax_t written = fs::file_size(temporary, ec);
+    if (type == FileType::tiff && (ec || written < std::uintmax_t(spec.image_bytes())))
+      throw InputError(path, "",
+                       fmt::format("cannot write the image: the file holds {} bytes, fewer than its {} bytes of pixels "
+                                   "(disk full or a file-size limit?)",
+                                   ec ? 0 : written, spec.image_bytes()));
   });
 }
 

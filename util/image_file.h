@@ -55,18 +55,33 @@ StoredImage read_stored_image(const std::string& path);
 GrayImage read_gray_image(const std::string& path);
 
 // Width and height from an image file's header, without reading its pixels;
-// std::nullopt when the file is missing or not an image OIIO opens (how a rerun
-// of a series tells a frame already written: outputs are atomic, so a file
-// under its final name is complete).
+// std::nullopt when the file is missing or not an image OIIO opens.
 std::optional<std::array<int, 2>> image_file_size(const std::string& path);
+
+// What an image file's header says, without reading its pixels, and with
+// check_end whether its last row reads back (one strip or tile of a TIFF; a
+// PNG or a single-strip TIFF reads whole); std::nullopt when the file is
+// missing or not an image OIIO opens.
+struct ImageFileHeader {
+  int width = 0, height = 0, channels = 0;
+  std::string sample_type;     // as stored: "uint8", "uint16", "half", "float", "int32", ...
+  std::string description;     // the file's ImageDescription ("" if none): see write_gray_image
+  // With check_end, false when the file's last row (or tile) cannot be read:
+  // cut short (a power loss, an interrupted copy) or damaged at its end.
+  bool pixels_present = true;
+};
+std::optional<ImageFileHeader> read_image_file_header(const std::string& path, bool check_end = false);
 
 // The file type comes from the extension: .tif/.tiff (uncompressed), .png, .exr
 // (zip, lossless). uint8/uint16 store round(clamp(v, 0, 1) * 255 resp. 65535),
 // halves up, NaN -> 0; float32 stores the values bit for bit (TIFF and EXR only).
 // EXR holds no integers and PNG no floats: those combinations are refused.
-// Throws std::invalid_argument for an empty image (a programming error).
+// description, unless empty, is stored as the file's ImageDescription (read
+// back by read_image_file_header). Throws std::invalid_argument for an empty
+// image (a programming error). A file cut short while writing (a full disk, a
+// file-size limit) throws InputError naming `path`, and nothing is left.
 void write_gray_image(const std::string& path, const float* values, int width, int height,
-                      PixelFormat format);
+                      PixelFormat format, const std::string& description = "");
 void write_gray_image(const std::string& path, const GrayImage& image, PixelFormat format);
 
 // "8"/"uint8", "16"/"uint16", "float"/"32"/"float32"; anything else throws

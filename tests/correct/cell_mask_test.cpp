@@ -64,6 +64,21 @@ TEST(CellMask, CamerasAddUp) {
   EXPECT_EQ(classify_cells({{&a, 1.0}, {&b, 0.0}}, scene)[0], CellState::mostly_reflected);
 }
 
+// Camera weights weigh the data, never the mask: equal small weights (or any
+// positive ones) give the mask of weight 1; only 0 leaves a camera out.
+TEST(CellMask, WeightsDoNotScaleTheMask) {
+  const CorrectionOperator a = hand_made({1}, {1}, {0.9f}), b = hand_made({1}, {0.2f}, {0.9f});
+  TraceScene scene;
+  const std::vector<CellState> unit = classify_cells({{&a, 1.0}, {&b, 1.0}}, scene);
+  ASSERT_EQ(unit[0], CellState::valid);
+  EXPECT_EQ(classify_cells({{&a, 1e-4}, {&b, 1e-4}}, scene), unit);
+  EXPECT_EQ(classify_cells({{&a, 3.0}, {&b, 1e-6}}, scene), unit);
+  EXPECT_EQ(classify_cells({{&a, 1e-4}}, scene), classify_cells({{&a, 1.0}}, scene));
+  const CorrectionOperator faint = hand_made({0.3f}, {0.3f}, {0.9f});
+  EXPECT_EQ(classify_cells({{&faint, 1.0}}, scene)[0], CellState::valid);
+  EXPECT_EQ(classify_cells({{&faint, 0.5}}, scene)[0], CellState::valid);
+}
+
 TEST(CellMask, RefusesMixedGridsAndBadThresholds) {
   const CorrectionOperator a = hand_made({1}, {1}, {1}), b = hand_made({1, 1}, {1, 1}, {1, 1});
   TraceScene scene;

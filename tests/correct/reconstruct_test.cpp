@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <cstdio>
 #include <random>
 
@@ -115,6 +117,92 @@ TEST(Reconstruct, FiveCamerasFillTheRimsAndLeastSquaresRemovesGhosts) {
   std::printf("accumulation RMS error %.4f, NCC %.4f; least squares (%d iterations) RMS error %.4f, NCC %.4f\n", e_acc,
               ncc(acc, truth, together), rep.iterations, e_lsq, ncc(lsq, truth, together));
   EXPECT_LT(e_lsq, 0.8 * e_acc);
+}
+
+// A small operator by hand: pixel p sees the cells and weights of rows[p]
+// (a cell of a 6 x 1 grid each); no background.
+CorrectionOperator hand_operator(const std::vector<std::vector<std::pair<std::uint32_t, float>>>& rows) {
+  CorrectionOperator op;
+  op.width = static_cast<int>(rows.size());
+  op.height = 1;
+  op.grid.cols = 6;
+  op.grid.rows = 1;
+  op.grid.mm_per_px = 1;
+  op.pixel_offsets = {0};
+  for (const auto& row : rows) {
+    for (const auto& [cell, value] : row) {
+      op.cell.push_back(cell);
+      op.value.push_back(value);
+    }
+    op.pixel_offsets.push_back(static_cast<std::uint32_t>(op.cell.size()));
+  }
+  op.background_weight.assign(rows.size(), 0.0f);
+  op.cell_pixels.assign(6, 1.0f);
+  op.cell_direct_pixels.assign(6, 1.0f);
+  finish_correction_operator(op);
+  return op;
+}
+
+// Every cell seen directly, cells 1 and 4 also through a ghost of pixels 4 and 1;
+// pixel 5 alone sees cell 5.
+std::vector<std::vector<std::pair<std::uint32_t, float>>> ghost_rows() {
+  return {{{0, 1.0f}}, {{1, 0.9f}, {4, 0.1f}}, {{2, 1.0f}}, {{3, 1.0f}}, {{4, 0.9f}, {1, 0.1f}}, {{5, 1.0f}},
+          {{2, 0.5f}, {3, 0.5f}}};
+}
+
+// A non-finite pixel is left out: the result is that of the operator without
+// its row (an independent reference), for both methods, and least squares
+// iterates instead of returning its start. A cell only that pixel sees has no data.
+TEST(Reconstruct, NonFinitePixelsAreLeftOut) {
+  const auto rows = ghost_rows();
+  const CorrectionOperator op = hand_operator(rows);
+  const std::vector<CellState> states(6, CellState::valid);
+  const std::vector<float> image = {0.2f, 0.7f, 0.4f, 0.9f, 0.3f, 0.6f, 0.65f};
+  for (const float bad : {std::nanf(""), std::numeric_limits<float>::infinity()})
+    for (const std::size_t p : {std::size_t(1), std::size_t(5)}) {
+      std::vector<float> with_bad = image;
+      with_bad[p] = bad;
+      auto without_rows = rows;
+      without_rows[p].clear();
+      const CorrectionOperator reference = hand_operator(without_rows);
+      std::vector<float> zeroed = image;
+      zeroed[p] = 0;
+      const std::vector<float> bp = back_projection({{&op, with_bad.data()}}, states);
+      const std::vector<float> bp_ref = back_projection({{&reference, zeroed.data()}}, states);
+      LeastSquaresOptions exact;
+      exact.smoothness = 0;  // lambda from the column norms would differ between the two operators
+      exact.tolerance = 1e-6;
+      LeastSquaresReport rep;
+      const std::vector<float> ls = least_squares({{&op, with_bad.data()}}, states, bp, exact, &rep);
+      const std::vector<float> ls_ref = least_squares({{&reference, zeroed.data()}}, states, bp_ref, exact);
+      EXPECT_EQ(rep.masked_pixels, 1u);
+      EXPECT_GT(rep.iterations, 0);
+      for (std::size_t c = 0; c < 6; ++c) {
+        if (p == 5 && c == 5) {  // seen by the left-out pixel only
+          EXPECT_TRUE(std::isnan(bp[c]));
+          EXPECT_TRUE(std::isnan(ls[c]));
+          continue;
+        }
+        ASSERT_TRUE(std::isfinite(bp[c])) << c;
+        EXPECT_NEAR(bp[c], bp_ref[c], 1e-6) << "pixel " << p << ", cell " << c;
+        ASSERT_TRUE(std::isfinite(ls[c])) << c;
+        EXPECT_NEAR(ls[c], ls_ref[c], 1e-4) << "pixel " << p << ", cell " << c;
+      }
+      // The ghost is explained away: least squares differs from its start where the ghost lies.
+      if (p == 5) EXPECT_GT(std::abs(ls[4] - bp[4]), 1e-3);
+    }
+}
+
+// A frame without a finite pixel: back-projection says no data (NaN, not 0)
+// and least squares refuses instead of returning zeros.
+TEST(Reconstruct, AFrameWithoutFinitePixelsHasNoData) {
+  const CorrectionOperator op = hand_operator(ghost_rows());
+  const std::vector<CellState> states(6, CellState::valid);
+  const std::vector<float> image(7, std::nanf(""));
+  const std::vector<float> bp = back_projection({{&op, image.data()}}, states);
+  for (float v : bp) EXPECT_TRUE(std::isnan(v));
+  EXPECT_THROW(least_squares({{&op, image.data()}}, states, bp), std::invalid_argument);
+  EXPECT_EQ(count_non_finite(image.data(), image.size()), 7u);
 }
 
 }  // namespace

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+#include <string>
+
+#include <yaml-cpp/yaml.h>
 
 #include "render/sheet_texture.h"
 
@@ -56,6 +59,33 @@ TEST(SheetGrid, RefusesBadPitchAndTooManyCells) {
   EXPECT_THROW(sheet_grid_covering(sheet(10, 10), -1), std::invalid_argument);
   EXPECT_THROW(sheet_grid_covering(sheet(10, 10), std::nan("")), std::invalid_argument);
   EXPECT_THROW(sheet_grid_covering(sheet(1e6, 1e6), 1e-3), std::invalid_argument);
+}
+
+// sheet_grid.yaml reads back as written, whatever the scene's path holds
+// ('#' starts a comment, ': ' a mapping, a newline a new key in plain YAML).
+TEST(SheetGrid, YamlReadsBackAnyScenePathAndTheNumbers) {
+  SheetPlane p = sheet(130, 100);
+  p.origin_mm = Eigen::Vector3d(1, 2, 3);
+  p.s_axis = Eigen::Vector3d(-1, 0, 0);
+  p.t_axis = Eigen::Vector3d(0, 1, 0);
+  const SheetGrid g = sheet_grid_covering(p, 0.3485);
+  for (const std::string path : {"Experiment #3/reactor.yaml", "a: b/scene.yaml", "x\ny: 1/s.yaml", "'q\"/s.yaml",
+                                 "- [x] {y}/s.yaml", " lead/trail.yaml ", "plain/scene.yaml"}) {
+    const YAML::Node n = YAML::Load(sheet_grid_yaml(g, p, path));
+    EXPECT_EQ(n["scene"].as<std::string>(), path);
+    EXPECT_EQ(n["glasspiv_sheet_grid"].as<int>(), 1);
+    EXPECT_EQ(n["cols"].as<int>(), g.cols);
+    EXPECT_EQ(n["rows"].as<int>(), g.rows);
+    EXPECT_EQ(n["mm_per_px"].as<double>(), g.mm_per_px);
+    EXPECT_EQ(n["s0_mm"].as<double>(), g.s0_mm);
+    EXPECT_EQ(n["t0_mm"].as<double>(), g.t0_mm);
+    const SheetGridPlacement w = sheet_grid_placement(g, p);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(n["cell00_centre_mm"][k].as<double>(), w.cell00_centre_mm[k]);
+      EXPECT_EQ(n["col_step_mm"][k].as<double>(), w.col_step_mm[k]);
+      EXPECT_EQ(n["row_step_mm"][k].as<double>(), w.row_step_mm[k]);
+    }
+  }
 }
 
 }  // namespace

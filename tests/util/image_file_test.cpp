@@ -2,6 +2,7 @@
 #include "util/image_file.h"
 
 #include <algorithm>
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -18,6 +19,7 @@
 #include <OpenImageIO/half.h>
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include "util/atomic_file.h"
@@ -367,6 +369,57 @@ TEST_F(ImageFileTest, FailedWritesLeaveTheTargetUntouchedAndNoTemporary) {
   EXPECT_EQ(read_file(path("keep.exr")), exr_bytes);
   EXPECT_EQ(files(), before);
   EXPECT_TRUE(fs::is_empty(path("taken.tif") + "/inside"));
+}
+
+// The description written with a frame reads back from the header alone, any
+// text kept (quotes, a newline); a file cut short is told from a complete one.
+TEST_F(ImageFileTest, DescriptionReadsBackFromTheHeaderAndACutFileIsFlagged) {
+  const std::vector<float> frame(64 * 48, 0.25f);
+  const std::string text = "{\"a\": \"x\\ny \\\"q\\\"\"}";
+  for (const PixelFormat format : {PixelFormat::uint16, PixelFormat::float32}) {
+    write_gray_image(path("d.tif"), frame.data(), 64, 48, format, text);
+    const auto header = read_image_file_header(path("d.tif"), true);
+    ASSERT_TRUE(header);
+    EXPECT_EQ(header->width, 64);
+    EXPECT_EQ(header->height, 48);
+    EXPECT_EQ(header->description, text);
+    EXPECT_EQ(header->sample_type, format == PixelFormat::uint16 ? "uint16" : "float");
+    EXPECT_TRUE(header->pixels_present);
+    // Cut short, as a power loss without fsync or an interrupted copy leaves it.
+    const std::string bytes = read_file(path("d.tif"));
+    for (std::size_t keep : {bytes.size() - 1, bytes.size() / 2, std::size_t(200)}) {
+      std::ofstream(path("cut.tif"), std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(keep));
+      const auto cut = read_image_file_header(path("cut.tif"), true);
+      EXPECT_TRUE(!cut || !cut->pixels_present || cut->description != text) << keep << " of " << bytes.size();
+    }
+  }
+  write_gray_image(path("none.tif"), frame.data(), 64, 48, PixelFormat::uint16);
+  EXPECT_EQ(read_image_file_header(path("none.tif"))->description, "");
+  EXPECT_FALSE(read_image_file_header(path("missing.tif")));
+}
+
+// Past a file-size limit (ulimit -f; SIGXFSZ ignored, as glasspiv's main does)
+// a write fails with one InputError naming the target, and leaves nothing.
+TEST_F(ImageFileTest, AWriteOverTheFileSizeLimitFailsAndLeavesNothing) {
+  const std::vector<float> frame(256 * 256, 0.5f);
+  struct rlimit saved{};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &saved), 0);
+  if (saved.rlim_cur != RLIM_INFINITY && saved.rlim_cur < 200000) GTEST_SKIP() << "already under a file-size limit";
+  const auto previous = std::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit small = saved;
+  small.rlim_cur = 50000;  // a 256 x 256 16-bit frame needs 131072 bytes
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+  std::string message;
+  for (const PixelFormat format : {PixelFormat::uint16, PixelFormat::float32})
+    message = input_error_of(path("big.tif"), [&] { write_gray_image(path("big.tif"), frame.data(), 256, 256, format); });
+  const std::string text(100000, 'x');
+  const std::string text_message = input_error_of(path("big.txt"), [&] { write_file_atomically(path("big.txt"), text); });
+  ::setrlimit(RLIMIT_FSIZE, &saved);
+  std::signal(SIGXFSZ, previous);
+  EXPECT_NE(message.find("big.tif"), std::string::npos) << message;
+  EXPECT_EQ(message.find(".tmp"), std::string::npos) << message;
+  EXPECT_NE(text_message.find("big.txt"), std::string::npos) << text_message;
+  EXPECT_TRUE(files().empty()) << *files().begin();
 }
 
 TEST_F(ImageFileTest, EmptyImagesAreAProgrammingError) {
