@@ -18,15 +18,7 @@ using namespace glasspiv;
 
 namespace {
 
-PlateTexture speckle(double dot_mm, std::uint64_t seed) {
-  TargetSpec spec;
-  spec.kind = TargetKind::speckle;
-  spec.plate_size_mm = Eigen::Vector2d(170, 140);
-  spec.dot_diameter_mm = dot_mm;
-  spec.fill = 0.4;
-  spec.seed = seed;
-  return plate_texture(spec, 0.05);
-}
+PlateTexture speckle(double dot_mm, std::uint64_t seed) { return plate_texture(speckle_spec(170, 140, dot_mm, seed), 0.05); }
 
 cv::Mat as_float(const cv::Mat& m) {
   cv::Mat f;

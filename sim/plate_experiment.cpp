@@ -36,6 +36,16 @@ PlateRig ball_layer_rig(int width_px, int height_px) {
   return rig;
 }
 
+TargetSpec speckle_spec(double width_mm, double height_mm, double dot_mm, std::uint64_t seed) {
+  TargetSpec spec;
+  spec.kind = TargetKind::speckle;
+  spec.plate_size_mm = Eigen::Vector2d(width_mm, height_mm);
+  spec.dot_diameter_mm = dot_mm;
+  spec.fill = 0.4;
+  spec.seed = seed;
+  return spec;
+}
+
 AsBuilt as_built(const TraceScene& drawing, const std::vector<RigidTransform>& cameras_from_world,
                  const BuildDeviation& deviation) {
   RandomVariates rng(deviation.seed);

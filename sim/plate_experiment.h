@@ -13,6 +13,7 @@
 #include "render/path_tracer.h"
 #include "render/sheet_texture.h"
 #include "sim/setup_photo.h"
+#include "targets/target_spec.h"
 
 namespace glasspiv {
 
@@ -27,6 +28,10 @@ struct PlateRig {
   RigidTransform camera_from_world;
 };
 PlateRig ball_layer_rig(int width_px, int height_px);
+
+// A speckle plate (targets/speckle_plate.h) of width x height mm, dots of
+// dot_mm covering 40 % of it, placed by the seed.
+TargetSpec speckle_spec(double width_mm, double height_mm, double dot_mm, std::uint64_t seed);
 
 // How the build differs from the drawing. Each glass sphere's centre moves by
 // N(0, sphere_centre_sigma_mm) per world axis; every glass solid's index by
