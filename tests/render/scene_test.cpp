@@ -175,7 +175,7 @@ TEST(SceneFiles, EveryShippedSceneLoadsAndValidates) {
     }
     ++count;
   }
-  EXPECT_EQ(count, 5);  // reactor, reactor_5cams, reactor_markers, ball_lens, flat_window
+  EXPECT_EQ(count, 6);  // reactor, reactor_5cams, reactor_markers, ball_lens, flat_window, ball_layer
 }
 
 TEST(SceneFiles, Reactor) {
