@@ -22,7 +22,6 @@ namespace {
 constexpr double kRadPerDeg = M_PI / 180.0;
 constexpr int kGainTerms = 6;    // 1, x, y, x^2, x y, y^2
 constexpr int kOffsetTerms = 3;  // 1, x, y
-constexpr int kPhotometric = kGainTerms + kOffsetTerms;
 constexpr double kGradientStep = 0.25;  // of a footprint
 
 enum class Kind { camera_rotation, camera_position, camera_focal, sheet_rotation, sheet_position, sphere_centre,
@@ -236,7 +235,7 @@ class Fitter {
 
  private:
   void build_parameters(const ModelFitFreedom& f, const ModelFitTolerances& tol);
-  Evaluation evaluate(const Model& m, const LevelData& level, const Eigen::VectorXd& theta);
+  Evaluation evaluate(const Model& m, const LevelData& level);
   double predicted(const Sample& s, const Eigen::VectorXd& theta) const;
   double gain(const Sample& s, const Eigen::VectorXd& theta) const;
   // Jacobian columns (sparse: sample, value), one per parameter.
@@ -337,8 +336,7 @@ double Fitter::predicted(const Sample& s, const Eigen::VectorXd& theta) const {
   return gain(s, theta) * s.value + o;
 }
 
-Evaluation Fitter::evaluate(const Model& m, const LevelData& level, const Eigen::VectorXd& theta) {
-  (void)theta;
+Evaluation Fitter::evaluate(const Model& m, const LevelData& level) {
   Evaluation e;
   TraceOptions trace = options_.trace;
   trace.record_solids_met = true;
@@ -856,7 +854,7 @@ ModelFitResult Fitter::run() {
     ModelFitLevel report;
     report.binning = level.binning;
     Model model = apply(drawing_, photos_, camera_of_, params_, theta);
-    Evaluation e = evaluate(model, level, theta);
+    Evaluation e = evaluate(model, level);
     report.traced_rays += e.rays;
     if (e.samples.empty())
       throw InputError("", "photo", "no pixel of the photos sees the plate through the model (binning " +
@@ -898,11 +896,7 @@ ModelFitResult Fitter::run() {
       const double sigma = std::max(robust_sigma(r), 1e-9 * (1 + rms(r)));
       if (it == 0) report.noise = sigma;
       std::vector<double> w(r.size());
-      double cost = prior_cost(theta);
-      for (std::size_t i = 0; i < r.size(); ++i) {
-        w[i] = huber_weight(r[i] / sigma, options_.huber_k);
-        cost += huber(r[i] / sigma, options_.huber_k);
-      }
+      for (std::size_t i = 0; i < r.size(); ++i) w[i] = huber_weight(r[i] / sigma, options_.huber_k);
       long rays = 0;
       cols = jacobian(model, level, e, theta, &rays);
       report.traced_rays += rays;
@@ -919,7 +913,7 @@ ModelFitResult Fitter::run() {
         }
         const Eigen::VectorXd trial = theta + step;
         Model trial_model = apply(drawing_, photos_, camera_of_, params_, trial);
-        Evaluation te = evaluate(trial_model, level, trial);
+        Evaluation te = evaluate(trial_model, level);
         report.traced_rays += te.rays;
         const std::vector<double> tr = residuals(te, trial);
         // Both costs over the pixels valid in both.
@@ -953,7 +947,6 @@ ModelFitResult Fitter::run() {
         if (params_[static_cast<std::size_t>(k)].prior_sigma > 0)
           largest = std::max(largest, std::abs(step[k]) / params_[static_cast<std::size_t>(k)].prior_sigma);
       if (largest < 1e-3) break;
-      (void)cost;
     }
     report.rms_after = rms(r);
     report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tl).count();
@@ -976,16 +969,11 @@ ModelFitResult Fitter::run() {
         if (!seen) result.unseen_spheres.push_back(solid);
       }
       // Level at the drawing, for the report: the finest level's residual before any step.
-      Model at_drawing = apply(drawing_, photos_, camera_of_, params_, [&] {
-        Eigen::VectorXd t = theta;
-        for (int k = 0; k < P; ++k)
-          if (params_[static_cast<std::size_t>(k)].prior_sigma > 0) t[k] = 0;
-        return t;
-      }());
+      // The drawing's geometry with the fitted lighting: the residual the fit started from.
       Eigen::VectorXd th0 = theta;
       for (int k = 0; k < P; ++k)
         if (params_[static_cast<std::size_t>(k)].prior_sigma > 0) th0[k] = 0;
-      const Evaluation e0 = evaluate(at_drawing, level, th0);
+      const Evaluation e0 = evaluate(apply(drawing_, photos_, camera_of_, params_, th0), level);
       result.residual_rms_start = rms(residuals(e0, th0));
     }
     result.levels.push_back(report);
