@@ -73,9 +73,9 @@ ModelFitFreedom freedom_of(const FitOptions& o) {
   return f;
 }
 
-void run_fit(const FitOptions& o) {
-  const Scene scene = read_scene(o.scene);
-  // The photos: PHOTO for --camera, CAM=FILE for the others.
+// The photos and their cameras: PHOTO for --camera, CAM=FILE for the others;
+// several photos of one camera only with the plate moved between them.
+std::vector<std::pair<int, std::string>> plate_views(const FitOptions& o, const Scene& scene) {
   std::vector<std::pair<int, std::string>> views;
   if (!o.offsets_mm.empty() && o.offsets_mm.size() != o.photos.size())
     throw InputError("", "--plate-offsets-mm",
@@ -89,12 +89,9 @@ void run_fit(const FitOptions& o) {
     views.emplace_back(camera_index(scene, cp.substr(0, eq), "--photo"), cp.substr(eq + 1));
   }
   if (views.empty()) throw InputError("", "PHOTO", "give a plate photo (PHOTO or --photo CAMERA=FILE)");
-  {
-    std::vector<std::string> paths;
-    for (const auto& v : views) paths.push_back(v.second);
-    check_distinct_inputs(paths, "PHOTO", "plate photo");  // one photo named twice is one view
-  }
-  // Several photos of one camera only with the plate moved between them.
+  std::vector<std::string> paths;
+  for (const auto& v : views) paths.push_back(v.second);
+  check_distinct_inputs(paths, "PHOTO", "plate photo");  // one photo named twice is one view
   std::map<int, int> per_camera;
   for (const auto& v : views)
     if (++per_camera[v.first] > 1 && o.offsets_mm.empty())
@@ -106,6 +103,55 @@ void run_fit(const FitOptions& o) {
     for (std::size_t j = 0; j < i; ++j)
       if (o.offsets_mm[i] == o.offsets_mm[j])
         throw InputError("", "--plate-offsets-mm", fmt::format("offset {} mm given twice", o.offsets_mm[i]));
+  return views;
+}
+
+// The table of parameters, the spheres no pixel sees, what the photos cannot pin down.
+void print_parameters(const ModelFitResult& fit, const std::vector<SphereSolid>& spheres) {
+  std::printf("%-34s %14s %14s %12s %12s\n", "parameter", "drawing", "fitted", "1-sigma", "tolerance");
+  for (const FittedParameter& p : fit.parameters)
+    std::printf("%-34s %14.6f %14.6f %12.3g %12.3g%s\n", p.name.c_str(), p.drawing, p.fitted, p.sigma, p.prior_sigma,
+                p.determined() ? "" : "  (not determined by the photos: held by the drawing's tolerance)");
+  for (int s : fit.unseen_spheres)
+    std::printf("no pixel looks through %s: left at the drawing\n",
+                spheres[static_cast<std::size_t>(s)].field.c_str());
+  for (const WeakCombination& w : fit.weak) {
+    std::string parts;
+    for (const auto& [name, weight] : w.parts) parts += fmt::format("{}{:+.2f} {}", parts.empty() ? "" : ", ", weight, name);
+    std::printf("the photos cannot separate (%.0f %% of the drawing's information): %s\n", 100 * w.information,
+                parts.c_str());
+  }
+}
+
+nlohmann::json fit_json(const ModelFitResult& fit, const std::vector<SphereSolid>& spheres) {
+  nlohmann::json j;
+  j["residual_rms_drawing"] = fit.residual_rms_start;
+  j["residual_rms_fitted"] = fit.residual_rms_end;
+  j["explained_variance"] = fit.explained_variance;
+  j["seconds"] = fit.seconds;
+  for (const FittedParameter& p : fit.parameters)
+    j["parameters"].push_back({{"name", p.name}, {"drawing", p.drawing}, {"fitted", p.fitted}, {"sigma", p.sigma},
+                               {"tolerance", p.prior_sigma}, {"determined", p.determined()}});
+  for (int s : fit.unseen_spheres) j["unseen_spheres"].push_back(spheres[static_cast<std::size_t>(s)].field);
+  for (const WeakCombination& w : fit.weak) {
+    nlohmann::json parts;
+    for (const auto& [name, weight] : w.parts) parts.push_back({{"parameter", name}, {"weight", weight}});
+    j["weak_combinations"].push_back({{"information", w.information}, {"parts", parts}});
+  }
+  for (const ModelFitLevel& l : fit.levels)
+    j["levels"].push_back({{"binning", l.binning}, {"pixels", l.pixels}, {"residual_before", l.rms_before},
+                           {"residual_after", l.rms_after}, {"photo_sd", l.photo_sd}, {"iterations", l.iterations},
+                           {"rays", l.traced_rays}, {"seconds", l.seconds}});
+  std::vector<std::vector<double>> cov(static_cast<std::size_t>(fit.covariance.rows()));
+  for (Eigen::Index a = 0; a < fit.covariance.rows(); ++a)
+    for (Eigen::Index b = 0; b < fit.covariance.cols(); ++b) cov[static_cast<std::size_t>(a)].push_back(fit.covariance(a, b));
+  j["covariance"] = cov;
+  return j;
+}
+
+void run_fit(const FitOptions& o) {
+  const Scene scene = read_scene(o.scene);
+  const std::vector<std::pair<int, std::string>> views = plate_views(o, scene);
   std::vector<std::string> inputs = scene_input_files(scene);
   inputs.push_back(o.plate);
   for (const auto& v : views) inputs.push_back(v.second);
@@ -150,20 +196,8 @@ void run_fit(const FitOptions& o) {
                                  "nothing written",
                                  100 * fit.explained_variance, 100 * o.min_explained, fit.residual_rms_end,
                                  fit.levels.back().photo_sd));
-  std::printf("%-34s %14s %14s %12s %12s\n", "parameter", "drawing", "fitted", "1-sigma", "tolerance");
-  for (const FittedParameter& p : fit.parameters)
-    std::printf("%-34s %14.6f %14.6f %12.3g %12.3g%s\n", p.name.c_str(), p.drawing, p.fitted, p.sigma, p.prior_sigma,
-                p.determined() ? "" : "  (not determined by the photos: held by the drawing's tolerance)");
   const std::vector<SphereSolid> spheres = scene.all_spheres();
-  for (int s : fit.unseen_spheres)
-    std::printf("no pixel looks through %s: left at the drawing\n",
-                spheres[static_cast<std::size_t>(s)].field.c_str());
-  for (const WeakCombination& w : fit.weak) {
-    std::string parts;
-    for (const auto& [name, weight] : w.parts) parts += fmt::format("{}{:+.2f} {}", parts.empty() ? "" : ", ", weight, name);
-    std::printf("the photos cannot separate (%.0f %% of the drawing's information): %s\n", 100 * w.information,
-                parts.c_str());
-  }
+  print_parameters(fit, spheres);
 
   std::vector<FittedCamera> cams;
   std::map<int, bool> written;
@@ -183,29 +217,7 @@ void run_fit(const FitOptions& o) {
   write_scene(o.output, fitted);
   std::printf("wrote %s\n", o.output.c_str());
   if (!o.json.empty()) {
-    nlohmann::json j;
-    j["residual_rms_drawing"] = fit.residual_rms_start;
-    j["residual_rms_fitted"] = fit.residual_rms_end;
-    j["explained_variance"] = fit.explained_variance;
-    j["seconds"] = fit.seconds;
-    for (const FittedParameter& p : fit.parameters)
-      j["parameters"].push_back({{"name", p.name}, {"drawing", p.drawing}, {"fitted", p.fitted}, {"sigma", p.sigma},
-                                 {"tolerance", p.prior_sigma}, {"determined", p.determined()}});
-    for (int s : fit.unseen_spheres) j["unseen_spheres"].push_back(spheres[static_cast<std::size_t>(s)].field);
-    for (const WeakCombination& w : fit.weak) {
-      nlohmann::json parts;
-      for (const auto& [name, weight] : w.parts) parts.push_back({{"parameter", name}, {"weight", weight}});
-      j["weak_combinations"].push_back({{"information", w.information}, {"parts", parts}});
-    }
-    for (const ModelFitLevel& l : fit.levels)
-      j["levels"].push_back({{"binning", l.binning}, {"pixels", l.pixels}, {"residual_before", l.rms_before},
-                             {"residual_after", l.rms_after}, {"photo_sd", l.photo_sd}, {"iterations", l.iterations},
-                             {"rays", l.traced_rays}, {"seconds", l.seconds}});
-    std::vector<std::vector<double>> cov(static_cast<std::size_t>(fit.covariance.rows()));
-    for (Eigen::Index a = 0; a < fit.covariance.rows(); ++a)
-      for (Eigen::Index b = 0; b < fit.covariance.cols(); ++b) cov[static_cast<std::size_t>(a)].push_back(fit.covariance(a, b));
-    j["covariance"] = cov;
-    write_file_atomically(o.json, j.dump(2) + "\n");
+    write_file_atomically(o.json, fit_json(fit, spheres).dump(2) + "\n");
     std::printf("wrote %s\n", o.json.c_str());
   }
 }
