@@ -40,7 +40,7 @@ cams="$src/data/cameras"
 # --help on every command.
 for cmd in "" "camera" "camera convert" "camera show" "camera compare" "demo" "calib" "calib detect" \
   "calib intrinsics" "calib report" "calib next" "target" "target print" "target show" "render" "correct" "coverage" \
-  "align" "align pose" "align check" "align refine" "align sensitivity" "piv" "simulate"; do
+  "align" "align pose" "align check" "align refine" "align sensitivity" "align fit" "piv" "simulate"; do
   # shellcheck disable=SC2086
   "$glasspiv" $cmd --help >"$work/out" 2>&1 && grep -q "Usage" "$work/out" && ok || fail "glasspiv $cmd --help"
 done
@@ -388,6 +388,33 @@ expect_error 2 "away.yaml" "took no step" "nothing written" -- "$glasspiv" align
   "$work/al/photo.png" --binning 4 --levels 8 --scene-out "$al/away_refined.yaml" --json "$work/al/away.json"
 [ ! -e "$al/away_refined.yaml" ] && [ ! -e "$work/al/away.json" ] && ok || fail "a failed refinement wrote its pose"
 cmp -s "$src/data/scenes/reactor_markers.yaml" "$al/reactor_markers.yaml" && ok || fail "align changed its input scene"
+
+# align fit: the ball layer binned 16 x 16, its plate photo rendered through the
+# drawing itself (the fit must stay at the drawing and explain the photo), then
+# the refusals: another plate, a photo of the wrong size, two photos of one
+# camera without the plate's positions, offsets that do not match the photos.
+layer="$src/data/scenes/ball_layer.yaml"
+speckle="$src/data/targets/speckle_150x120_0.5mm.yaml"
+mkdir -p "$work/fit"
+expect_ok "$glasspiv" target print "$speckle" -o "$work/fit/plate.svg" --png "$work/fit/plate.png" --dpi 254
+expect_ok "$glasspiv" render "$layer" --sheet-texture "$work/fit/plate.png" --texture-mm-per-px 0.1 --binning 16 \
+  --samples 3 -o "$work/fit/photo.tif"
+expect_ok "$glasspiv" align fit "$layer" "$work/fit/photo.tif" --plate "$speckle" --binning 16 --levels 2,1 \
+  -o "$work/fit/fitted.yaml" --json "$work/fit/fit.json"
+grep -q '"explained_variance": 0.9' "$work/fit/fit.json" && [ -s "$work/fit/fitted.yaml" ] && ok \
+  || fail "align fit outputs"
+expect_ok "$glasspiv" render "$work/fit/fitted.yaml" --sheet-pattern checker --binning 16 -o "$work/fit/check.png"
+sed 's/^seed: 1/seed: 2/' "$speckle" > "$work/fit/other.yaml"
+expect_error 2 "photo.tif" "does not show this plate" "nothing written" -- "$glasspiv" align fit "$layer" \
+  "$work/fit/photo.tif" --plate "$work/fit/other.yaml" --binning 16 --levels 2 -o "$work/fit/other_fit.yaml"
+[ ! -e "$work/fit/other_fit.yaml" ] && ok || fail "a refused fit wrote its scene"
+expect_error 2 "photo.tif" "size" -- "$glasspiv" align fit "$layer" "$work/fit/photo.tif" --plate "$speckle" \
+  --binning 8 -o "$work/fit/f.yaml"
+cp "$work/fit/photo.tif" "$work/fit/photo2.tif" && printf x >> "$work/fit/photo2.tif"
+expect_error 2 "second photo" "--plate-offsets-mm" -- "$glasspiv" align fit "$layer" "$work/fit/photo.tif" \
+  "$work/fit/photo2.tif" --plate "$speckle" --binning 16 -o "$work/fit/f.yaml"
+expect_error 2 "--plate-offsets-mm" "2 offsets for 1" -- "$glasspiv" align fit "$layer" "$work/fit/photo.tif" \
+  --plate "$speckle" --binning 16 --plate-offsets-mm 0,4 -o "$work/fit/f.yaml"
 
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]
