@@ -106,6 +106,15 @@ std::vector<std::pair<int, std::string>> plate_views(const FitOptions& o, const 
   return views;
 }
 
+void print_levels(const ModelFitResult& fit) {
+  for (const ModelFitLevel& l : fit.levels)
+    std::printf("level %d: %d px, residual %.4g -> %.4g (photo sd %.4g), %d steps, %ld rays, %.1f s\n", l.binning,
+                l.pixels, l.rms_before, l.rms_after, l.photo_sd, l.iterations, l.traced_rays, l.seconds);
+  std::printf("residual at full resolution: drawing %.4g, fitted %.4g; the model explains %.1f %% of the photo's "
+              "variance\n",
+              fit.residual_rms_start, fit.residual_rms_end, 100 * fit.explained_variance);
+}
+
 // The table of parameters, the spheres no pixel sees, what the photos cannot pin down.
 void print_parameters(const ModelFitResult& fit, const std::vector<SphereSolid>& spheres) {
   std::printf("%-34s %14s %14s %12s %12s\n", "parameter", "drawing", "fitted", "1-sigma", "tolerance");
@@ -149,6 +158,27 @@ nlohmann::json fit_json(const ModelFitResult& fit, const std::vector<SphereSolid
   return j;
 }
 
+// The scene of the fitted model: each camera's pose from its first photo. A
+// fitted model the scene format refuses (two balls fitted into each other at
+// a contact) is reported, not written as a file that cannot be read back.
+Scene checked_fitted_scene(const Scene& scene, const ModelFitResult& fit,
+                           const std::vector<std::pair<int, std::string>>& views, const std::string& output) {
+  std::vector<FittedCamera> cams;
+  std::map<int, bool> written;
+  for (std::size_t i = 0; i < views.size(); ++i)
+    if (!written[views[i].first]) {
+      written[views[i].first] = true;
+      cams.push_back({views[i].first, fit.camera_from_world[i], fit.focal_scale[i]});
+    }
+  Scene fitted = fitted_scene(scene, fit.scene, cams);
+  try {
+    validate(fitted);
+  } catch (const InputError& e) {
+    throw InputError(output, e.field(), "the fitted model is not a valid scene (" + e.problem() + "); nothing written");
+  }
+  return fitted;
+}
+
 void run_fit(const FitOptions& o) {
   const Scene scene = read_scene(o.scene);
   const std::vector<std::pair<int, std::string>> views = plate_views(o, scene);
@@ -183,12 +213,7 @@ void run_fit(const FitOptions& o) {
   });
   bar.finish();
 
-  for (const ModelFitLevel& l : fit.levels)
-    std::printf("level %d: %d px, residual %.4g -> %.4g (photo sd %.4g), %d steps, %ld rays, %.1f s\n", l.binning,
-                l.pixels, l.rms_before, l.rms_after, l.photo_sd, l.iterations, l.traced_rays, l.seconds);
-  std::printf("residual at full resolution: drawing %.4g, fitted %.4g; the model explains %.1f %% of the photo's "
-              "variance\n",
-              fit.residual_rms_start, fit.residual_rms_end, 100 * fit.explained_variance);
+  print_levels(fit);
   if (fit.explained_variance < o.min_explained)
     throw InputError(views.front().second, "PHOTO",
                      fmt::format("does not show this plate through this model: the fitted model explains {:.1f} % of "
@@ -199,21 +224,7 @@ void run_fit(const FitOptions& o) {
   const std::vector<SphereSolid> spheres = scene.all_spheres();
   print_parameters(fit, spheres);
 
-  std::vector<FittedCamera> cams;
-  std::map<int, bool> written;
-  for (std::size_t i = 0; i < views.size(); ++i)
-    if (!written[views[i].first]) {
-      written[views[i].first] = true;
-      cams.push_back({views[i].first, fit.camera_from_world[i], fit.focal_scale[i]});
-    }
-  const Scene fitted = fitted_scene(scene, fit.scene, cams);
-  // A fitted model the scene format refuses (two balls fitted into each other
-  // at a contact) is reported, not written as a file that cannot be read back.
-  try {
-    validate(fitted);
-  } catch (const InputError& e) {
-    throw InputError(o.output, e.field(), "the fitted model is not a valid scene (" + e.problem() + "); nothing written");
-  }
+  const Scene fitted = checked_fitted_scene(scene, fit, views, o.output);
   write_scene(o.output, fitted);
   std::printf("wrote %s\n", o.output.c_str());
   if (!o.json.empty()) {
